@@ -1,0 +1,176 @@
+#include "drivers/can/j1939.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cstdint>
+
+#include "drivers/bias.hpp"
+
+namespace j = drivers::j1939;
+using drivers::LinkErrorKind;
+
+namespace {
+
+std::uint32_t raw_id(const can_frame& f) { return f.can_id & CAN_EFF_MASK; }
+
+}  // namespace
+
+TEST(J1939Id, Pdu2KeepsGroupExtensionInPgn) {
+  const std::uint32_t id = j::encode_id({3, 0xFF51, 0x00, 0x42});
+  EXPECT_EQ(id, 0x0CFF5100u);  // priority 3 -> 0x0C......, destination ignored for PDU2
+  const j::Id back = j::decode_id(id);
+  EXPECT_EQ(back.pgn, 0xFF51u);
+  EXPECT_EQ(back.priority, 3);
+  EXPECT_EQ(back.source, 0x00);
+  EXPECT_EQ(back.destination, j::kGlobalAddress);
+}
+
+TEST(J1939Id, Pdu1CarriesDestinationInPs) {
+  const std::uint32_t id = j::encode_id({3, j::kPgnTsc1, j::kRigAddress, j::kGovernorAddress});
+  EXPECT_EQ(id, 0x0C0000F9u);
+  const std::uint32_t id2 = j::encode_id({6, 0xEA00, 0x11, 0x22});  // request PGN, PDU1
+  EXPECT_EQ(id2, 0x18EA2211u);
+  const j::Id back = j::decode_id(id2);
+  EXPECT_EQ(back.pgn, 0xEA00u);
+  EXPECT_EQ(back.destination, 0x22);
+  EXPECT_EQ(back.source, 0x11);
+  EXPECT_TRUE(j::is_pdu1(j::kPgnTsc1));
+  EXPECT_FALSE(j::is_pdu1(j::kPgnEec1));
+}
+
+TEST(J1939Tsc1, WorkedExample750Rpm) {
+  const can_frame f = j::encode_tsc1({750.0, 5});
+  EXPECT_EQ(f.data[1], 0x70);  // raw 6000 = 0x1770, little-endian
+  EXPECT_EQ(f.data[2], 0x17);
+  EXPECT_EQ(f.data[0] & 0x03, 0x01);  // speed-control mode
+  EXPECT_EQ(j::pgn_of(f), j::kPgnTsc1);
+  auto d = j::decode_tsc1(f, std::uint8_t{4});
+  ASSERT_TRUE(d) << d.error().message();
+  EXPECT_DOUBLE_EQ(d->speed_rpm, 750.0);
+  EXPECT_EQ(d->counter, 5);
+}
+
+TEST(J1939Gtacp, WorkedExample4p6Mw) {
+  const can_frame f = j::encode_gtacp({4.6e6, 0.0});
+  EXPECT_EQ(f.data[0], 0xC0);  // raw 0x777BC4C0 = 4.6e6 + 2e9
+  EXPECT_EQ(f.data[1], 0xC4);
+  EXPECT_EQ(f.data[2], 0x7B);
+  EXPECT_EQ(f.data[3], 0x77);
+  auto d = j::decode_gtacp(f);
+  ASSERT_TRUE(d) << d.error().message();
+  EXPECT_DOUBLE_EQ(d->real_power_w, 4.6e6);
+  EXPECT_DOUBLE_EQ(d->reactive_power_var, 0.0);
+}
+
+TEST(J1939Eec1, RoundTripSpeed) {
+  const can_frame f = j::encode_eec1({600.375, 80.0});
+  EXPECT_EQ(j::pgn_of(f), j::kPgnEec1);
+  EXPECT_EQ(raw_id(f), 0x0CF00400u);
+  auto d = j::decode_eec1(f);
+  ASSERT_TRUE(d);
+  EXPECT_DOUBLE_EQ(d->speed_rpm, 600.375);
+  EXPECT_DOUBLE_EQ(d->actual_torque_pct, 80.0);
+}
+
+TEST(J1939RigCommand, RoundTripAndQuantisation) {
+  for (double bias : {0.0, 1.2345, -2.9996, 3.0}) {
+    const can_frame f = j::encode_rig_command({bias, true, 9});
+    auto d = j::decode_rig_command(f, std::uint8_t{8});
+    ASSERT_TRUE(d) << d.error().message();
+    EXPECT_DOUBLE_EQ(d->bias_pct, drivers::bias_from_raw(drivers::quantise_bias(bias)));
+    EXPECT_NEAR(d->bias_pct, bias, 0.0005 + 1e-12);  // half a bit
+    EXPECT_TRUE(d->enable);
+    EXPECT_EQ(d->counter, 9);
+  }
+  // 1.2345 % -> raw 1235 (round half away from zero) = 0x04D3, little-endian.
+  const can_frame f = j::encode_rig_command({1.2345, false, 0});
+  EXPECT_EQ(f.data[0], 0xD3);
+  EXPECT_EQ(f.data[1], 0x04);
+  EXPECT_EQ(f.data[2] & 1, 0);
+}
+
+TEST(J1939RigCommand, BiasClampedToInt16) {
+  const can_frame hi = j::encode_rig_command({1000.0, true, 0});
+  const can_frame lo = j::encode_rig_command({-1000.0, true, 0});
+  EXPECT_DOUBLE_EQ(j::decode_rig_command(hi)->bias_pct, 32.767);
+  EXPECT_DOUBLE_EQ(j::decode_rig_command(lo)->bias_pct, -32.768);
+}
+
+TEST(J1939RigCommand, ChecksumMatchesDocumentedFormula) {
+  const can_frame f = j::encode_rig_command({0.5, true, 7});
+  // s = sum(data[0..6]) + counter + id bytes; cs = ((s >> 4) + s) & 0xF
+  std::uint32_t s = 7;
+  for (int i = 0; i < 7; ++i) s += f.data[i];
+  const std::uint32_t id = raw_id(f);
+  s += (id & 0xFF) + ((id >> 8) & 0xFF) + ((id >> 16) & 0xFF) + ((id >> 24) & 0xFF);
+  EXPECT_EQ(f.data[7] & 0x0F, ((s >> 4) + s) & 0x0F);
+  EXPECT_EQ(f.data[7] >> 4, 7);
+}
+
+TEST(J1939RigCommand, DetectsCorruptionWrongSenderAndCounterJump) {
+  const can_frame good = j::encode_rig_command({0.5, true, 3});
+  can_frame bad = good;
+  bad.data[0] ^= 0x01;  // one flipped bit in the bias
+  auto r = j::decode_rig_command(bad);
+  ASSERT_FALSE(r);
+  EXPECT_EQ(r.error().kind, LinkErrorKind::kChecksum);
+  EXPECT_EQ(r.error().where, "PGN 0xFF50");
+
+  // The identifier is in the checksum, so a frame re-addressed from another sender fails
+  // unless its 4-bit checksum collides (expected 1 in 16).
+  int detected = 0;
+  for (std::uint32_t sa = 0; sa < 256; ++sa) {
+    if (sa == j::kRigAddress) continue;
+    can_frame other = good;
+    other.can_id = (other.can_id & ~0xFFu) | sa;
+    detected += j::decode_rig_command(other) ? 0 : 1;
+  }
+  EXPECT_GE(detected, 255 * 14 / 16);
+
+  auto jump = j::decode_rig_command(good, std::uint8_t{1});  // 1 -> 3 skips one frame
+  ASSERT_FALSE(jump);
+  EXPECT_EQ(jump.error().kind, LinkErrorKind::kChecksum);
+  EXPECT_NE(jump.error().detail.find("expected 2"), std::string::npos);
+  EXPECT_TRUE(j::decode_rig_command(j::encode_rig_command({0, true, 0}), std::uint8_t{15}));
+}
+
+TEST(J1939PlantSample, RoundTripAndCounterNibble) {
+  const can_frame f = j::encode_plant_sample({3.5e6, 0x1234, 0x07});
+  auto d = j::decode_plant_sample(f);
+  ASSERT_TRUE(d) << d.error().message();
+  EXPECT_DOUBLE_EQ(d->power_w, 3.5e6);
+  EXPECT_EQ(d->counter, 0x1234);
+  EXPECT_EQ(d->status, 0x07);
+  EXPECT_EQ(f.data[4], 0x34);
+  EXPECT_EQ(f.data[5], 0x12);
+  EXPECT_EQ(f.data[7] >> 4, 0x4);
+
+  can_frame bad = f;
+  bad.data[4] = 0x35;  // counter changed without resealing
+  EXPECT_EQ(j::decode_plant_sample(bad).error().kind, LinkErrorKind::kChecksum);
+}
+
+TEST(J1939Lockstep, RoundTrip) {
+  const can_frame f = j::encode_lockstep({500});
+  EXPECT_EQ(j::pgn_of(f), j::kPgnLockstep);
+  EXPECT_EQ(j::decode_lockstep(f)->ticks, 500);
+}
+
+TEST(J1939Decode, RejectsLengthPgnAndFrameType) {
+  can_frame f = j::encode_plant_sample({1e6, 1, 0});
+  can_frame shorter = f;
+  shorter.can_dlc = 6;
+  auto r = j::decode_plant_sample(shorter);
+  ASSERT_FALSE(r);
+  EXPECT_EQ(r.error().kind, LinkErrorKind::kProtocol);
+  EXPECT_NE(r.error().detail.find("expected 8 data bytes, got 6"), std::string::npos);
+
+  auto wrong = j::decode_eec1(f);
+  ASSERT_FALSE(wrong);
+  EXPECT_EQ(wrong.error().kind, LinkErrorKind::kProtocol);
+  EXPECT_NE(wrong.error().detail.find("PGN 0xFF51"), std::string::npos);
+
+  can_frame standard = f;
+  standard.can_id = 0x123;
+  EXPECT_EQ(j::decode_plant_sample(standard).error().kind, LinkErrorKind::kProtocol);
+}
