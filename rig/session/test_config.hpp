@@ -1,0 +1,125 @@
+// The commissioning test file (docs/test-file.md): one TOML document with every setting of a
+// test, each with a documented default. Parsing is strict: an unknown key, a wrong type or an
+// unsafe value is one ConfigError naming the file, the key and what was expected, raised
+// before anything is written to the governor (DESIGN.md section 4: exit code 2).
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <optional>
+#include <stdexcept>
+#include <string>
+
+namespace rig::session {
+
+struct ConfigError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+// The largest power band allowed without an explicit override (DESIGN.md section 8).
+inline constexpr double kStandardBandPct = 3.0;
+
+struct LinkSettings {
+  std::string uri;                  // e.g. modbus+tcp://127.0.0.1:1502?unit=1
+  double sample_rate_hz = 100.0;    // one write/read exchange per sample
+  int lockstep_ticks = 0;           // > 0: simulated plant advanced this many ticks per sample
+  double timeout_s = 0.5;           // response timeout per request
+};
+
+struct PlantSettings {
+  double rated_power_kw = 4600.0;   // bias is in % of this
+  std::string preset;               // emulated plant preset (recorded only)
+};
+
+struct SafetySettings {
+  double band_pct = kStandardBandPct;  // |P - P0| <= band_pct % of P0
+  bool allow_band_above_3pct = false;  // required for band_pct > 3 (recorded in the report)
+  double plan_fraction = 0.8;          // planned peak deviation as a fraction of the band
+  double backoff_fraction = 0.9;       // amplitude backs off above this fraction of the band
+  double clamp_pct = 5.0;              // |bias| never exceeds this (% of rated power)
+  double ramp_pct_per_s = 2.0;         // bias ramp rate at start-up and ramp-down
+};
+
+struct SteadyStateSettings {
+  double duration_s = 10.0;      // length of the steady-state record
+  double max_noise_pct = 0.5;    // std(P - trend) limit, % of P0
+  double max_drift_pct = 0.5;    // |trend slope| * duration limit, % of P0
+  double min_power_kw = 1.0;     // the set must be loaded (P0 above this)
+};
+
+struct PilotSettings {
+  double amplitude_pct = 0.3;  // excitation std during the pilot, % of rated power
+  double duration_s = 20.0;
+};
+
+enum class ExcitationType { kGaussian, kPrbs };
+
+struct ExcitationSettings {
+  ExcitationType type = ExcitationType::kGaussian;
+  double bandwidth_hz = 4.0;        // about twice the expected mode (MMFM.md section 8)
+  std::uint64_t seed = 1;
+  double ac_coupling_rc_s = 1.6;    // matched high-pass RC on excitation and response; 0 = off
+  int prbs_register_length = 10;
+  int prbs_clock_divider = 2;
+};
+
+struct MmfmSettings {
+  int order_n = 2;                  // denominator order
+  int order_m = 0;                  // numerator order
+  std::optional<double> delay_s;    // nullopt: estimated
+  int lags = 256;                   // correlation window (samples)
+  int block_size = 2048;            // samples per correlator block / live estimate
+  int skip = 1;                     // Fell's skip
+  int averaging_w = 8;              // exponential averaging weight (blocks)
+  double target_rel_std_error = 0.05;  // stop when every parameter's rel. std error is below
+  double min_duration_s = 60.0;     // never stop before this much excitation
+  double max_duration_s = 300.0;    // stop regardless
+};
+
+struct SweepSettings {
+  bool enabled = true;
+  double from_hz = 0.3;
+  double to_hz = 6.0;
+  int points = 16;              // log-spaced
+  double settle_cycles = 3.0;   // cycles discarded after each frequency change
+  double integrate_cycles = 8.0;
+  double min_settle_s = 2.0;    // at least this long settled, whatever the frequency
+};
+
+struct CompareSettings {
+  double from_hz = 0.5;
+  double to_hz = 5.0;
+  double mag_tol_db = 1.0;
+  double phase_tol_deg = 5.0;
+  double min_coherence = 0.8;   // sweep points below this are excluded from the check
+};
+
+struct OutputSettings {
+  double flush_interval_s = 0.5;   // recording flushed at least this often
+  double live_interval_s = 1.0;    // live-view refresh (plain lines when not a TTY)
+};
+
+struct TestConfig {
+  std::string source;  // file name the settings came from ("<defaults>" otherwise)
+  LinkSettings link;
+  PlantSettings plant;
+  SafetySettings safety;
+  SteadyStateSettings steady_state;
+  PilotSettings pilot;
+  ExcitationSettings excitation;
+  MmfmSettings mmfm;
+  SweepSettings sweep;
+  CompareSettings compare;
+  OutputSettings output;
+};
+
+// Parses and validates a test file. Throws ConfigError (one line) on any problem.
+TestConfig load_test_file(const std::filesystem::path& path);
+// Same, from text; `source` names the document in error messages.
+TestConfig parse_test_toml(const std::string& text, const std::string& source);
+// Checks cross-field rules (band override, Nyquist, ranges). Throws ConfigError.
+void validate(const TestConfig& config);
+
+const char* to_string(ExcitationType type);
+
+}  // namespace rig::session

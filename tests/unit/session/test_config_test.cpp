@@ -1,0 +1,101 @@
+#include <gtest/gtest.h>
+
+#include <string>
+
+#include "rig/session/test_config.hpp"
+
+namespace rig::session {
+namespace {
+
+std::string error_of(const std::string& text) {
+  try {
+    parse_test_toml(text, "test.toml");
+  } catch (const ConfigError& e) {
+    return e.what();
+  }
+  return {};
+}
+
+TEST(TestConfig, DefaultsAreValidAndDocumentedValuesHold) {
+  const TestConfig c = parse_test_toml("", "test.toml");
+  EXPECT_DOUBLE_EQ(c.safety.band_pct, 3.0);
+  EXPECT_FALSE(c.safety.allow_band_above_3pct);
+  EXPECT_DOUBLE_EQ(c.compare.mag_tol_db, 1.0);
+  EXPECT_DOUBLE_EQ(c.compare.phase_tol_deg, 5.0);
+  EXPECT_DOUBLE_EQ(c.compare.from_hz, 0.5);
+  EXPECT_DOUBLE_EQ(c.compare.to_hz, 5.0);
+  EXPECT_EQ(c.excitation.type, ExcitationType::kGaussian);
+}
+
+TEST(TestConfig, ReadsEverySectionIntoItsField) {
+  const TestConfig c = parse_test_toml(R"(
+[link]
+uri = "modbus+tcp://127.0.0.1:1502?unit=1"
+sample_rate_hz = 50
+[safety]
+band_pct = 2.5
+[excitation]
+type = "prbs"
+seed = 42
+[mmfm]
+delay_s = 0.06
+lags = 128
+[sweep]
+from_hz = 0.2
+to_hz = 8.0
+points = 10
+)", "test.toml");
+  EXPECT_EQ(c.link.uri, "modbus+tcp://127.0.0.1:1502?unit=1");
+  EXPECT_DOUBLE_EQ(c.link.sample_rate_hz, 50.0);
+  EXPECT_DOUBLE_EQ(c.safety.band_pct, 2.5);
+  EXPECT_EQ(c.excitation.type, ExcitationType::kPrbs);
+  EXPECT_EQ(c.excitation.seed, 42u);
+  ASSERT_TRUE(c.mmfm.delay_s.has_value());
+  EXPECT_DOUBLE_EQ(*c.mmfm.delay_s, 0.06);
+  EXPECT_EQ(c.mmfm.lags, 128);
+  EXPECT_EQ(c.sweep.points, 10);
+}
+
+TEST(TestConfig, UnknownKeyIsNamedWithItsLine) {
+  const std::string e = error_of("[excitation]\nbandwith_hz = 4\n");
+  EXPECT_NE(e.find("test.toml: excitation.bandwith_hz: unknown key (line 2)"),
+            std::string::npos) << e;
+  EXPECT_NE(error_of("[exitation]\n").find("exitation"), std::string::npos);
+}
+
+TEST(TestConfig, WrongTypeNamesTheKeyAndTheExpectedType) {
+  const std::string e = error_of("[mmfm]\nlags = \"many\"\n");
+  EXPECT_NE(e.find("mmfm.lags: expected an integer, got a string"), std::string::npos) << e;
+  EXPECT_NE(error_of("[safety]\nband_pct = true\n").find("expected a number"),
+            std::string::npos);
+  EXPECT_NE(error_of("[excitation]\ntype = \"chirp\"\n").find("excitation.type"),
+            std::string::npos);
+}
+
+TEST(TestConfig, BandAboveThreePercentNeedsTheOverride) {
+  const std::string e = error_of("[safety]\nband_pct = 4.0\n");
+  EXPECT_NE(e.find("safety.band_pct = 4"), std::string::npos) << e;
+  EXPECT_NE(e.find("allow_band_above_3pct"), std::string::npos) << e;
+  const TestConfig c =
+      parse_test_toml("[safety]\nband_pct = 4.0\nallow_band_above_3pct = true\n", "t");
+  EXPECT_DOUBLE_EQ(c.safety.band_pct, 4.0);
+  EXPECT_DOUBLE_EQ(parse_test_toml("[safety]\nband_pct = 1.5\n", "t").safety.band_pct, 1.5);
+}
+
+TEST(TestConfig, SweepAboveNyquistIsRefused) {
+  const std::string e = error_of("[link]\nsample_rate_hz = 20\n[sweep]\nto_hz = 12\n");
+  EXPECT_NE(e.find("sweep.to_hz = 12"), std::string::npos) << e;
+  EXPECT_NE(e.find("Nyquist"), std::string::npos) << e;
+  EXPECT_NE(error_of("[sweep]\nfrom_hz = 3\nto_hz = 2\n").find("sweep.to_hz"),
+            std::string::npos);
+}
+
+TEST(TestConfig, SyntaxErrorIsOneLineWithPosition) {
+  const std::string e = error_of("[link\n");
+  EXPECT_EQ(e.find('\n'), std::string::npos) << e;
+  EXPECT_NE(e.find("test.toml"), std::string::npos) << e;
+  EXPECT_NE(e.find("line 1"), std::string::npos) << e;
+}
+
+}  // namespace
+}  // namespace rig::session
