@@ -1,0 +1,95 @@
+// Modified Modulating Function Method (MMFM.md sections 2-4 and 7, thesis chapter 3).
+//
+// The model A(p) y = B(p) u(t - Td) holds between the correlation functions:
+//     A(p) r_yu(tau) = B(p) r_uu(tau - Td),  p = d/dtau.
+// Multiplying by a modulating function phi and integrating by parts i times for p^i:
+//     sum_i a_i (-1)^i <phi^(i), r_yu> = sum_j b_j (-1)^j <phi^(j)(. + Td), r_uu>
+// (the delay moves onto the analytic modulating function, so any fractional Td is exact).
+// Each function (several shapes, several centres) gives one linear equation in
+// theta = [a_n..a_0, b_m..b_0]; the overdetermined set is solved by least squares with one
+// normalisation, or by total least squares (normalisation-free, then rescaled).
+#pragma once
+
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "rig/ident/modulating.hpp"
+#include "rig/ident/parameters.hpp"
+#include "rig/ident/transfer_function.hpp"
+#include "rig/signal/correlation.hpp"
+
+namespace rig::ident {
+
+enum class MmfmSolver { kLeastSquares, kTotalLeastSquares };
+const char* to_string(MmfmSolver solver);
+
+// One fixed configuration of the equation set.
+struct MmfmSettings {
+  ModulatingFamily family = ModulatingFamily::kHermite;
+  int functions = 8;              // modulating functions per centre
+  double scale_s = 0.1;           // Hermite S; polynomial: window length = 2 * half-width
+  std::vector<double> centres_s;  // lags of the function centres (in r_yu's lag axis)
+  MmfmSolver solver = MmfmSolver::kLeastSquares;
+  Normalisation normalisation = Normalisation::kMonicDen;
+};
+
+struct MmfmOptions {
+  ModelOrder order;
+  std::optional<double> delay_s;      // nullopt: estimated (search near the onset lag)
+  double max_delay_s = -1.0;          // search range upper end; < 0: automatic
+  ModulatingFamily family = ModulatingFamily::kHermite;
+  int functions = 8;
+  int centres = 5;                    // centres spread over the admissible lags
+  std::optional<double> scale_s;      // nullopt: scanned (scored by correlation fit)
+  MmfmSolver solver = MmfmSolver::kLeastSquares;
+  Normalisation normalisation = Normalisation::kMonicDen;
+};
+
+struct MmfmResult {
+  TransferFunction model;              // normalised as settings.normalisation
+  std::vector<ParameterEstimate> parameters;  // with std errors, last row delay_s
+  Eigen::MatrixXd covariance;          // of theta (ParameterEstimate order without delay)
+  double delay_s = 0.0;
+  double delay_std_s = 0.0;
+  DerivedFigures derived;              // second order only
+  double condition_number = 0.0;       // of the column-equilibrated equation matrix
+  double equation_residual = 0.0;      // relative residual of the equation set
+  double correlation_fit_pct = 0.0;    // model r_yu (= h * r_uu) against measured r_yu
+  int equations = 0;
+  MmfmSettings settings;               // what was used (scale, centres, solver, ...)
+  signal::Correlation model_ryu;       // the model's cross-correlation, for plots
+};
+
+// One solve with fixed settings and a given delay: builds the equations and solves them.
+// Standard errors come from the equation residual: cov = s^2 (Phi^T Phi)^-1 with
+// s^2 = |e|^2 / (K - p) (equations treated as independent; see the block estimate in
+// identify() for a spread-based alternative). Throws std::invalid_argument when the
+// functions do not fit inside the correlation window or the lag axes differ.
+MmfmResult mmfm_solve(const signal::Correlation& ruu, const signal::Correlation& ryu,
+                      ModelOrder order, double delay_s, const MmfmSettings& settings);
+
+// Full estimator: automatic time scale (scan around the cross-correlation's dominant time
+// scale), automatic dead time (1-D search scored by the correlation-domain output error,
+// fractional-sample resolution), standard errors and derived figures.
+MmfmResult estimate_mmfm(const signal::Correlation& ruu, const signal::Correlation& ryu,
+                         const MmfmOptions& options);
+
+// The model's cross-correlation r_yu_hat = h * r_uu on r_uu's lag axis (lsim of r_uu).
+signal::Correlation model_cross_correlation(const TransferFunction& tf,
+                                            const signal::Correlation& ruu);
+
+// Half-width (s) of the support of the functions of `settings` for the given order.
+double support_half_width_s(ModelOrder order, const MmfmSettings& settings);
+
+// Centres spread evenly over the lags where every function fits inside both windows for any
+// delay in [min_delay_s, max_delay_s], kept near the significant part of r_yu (count of
+// them; empty when none fits).
+std::vector<double> admissible_centres(const signal::Correlation& ruu,
+                                       const signal::Correlation& ryu, ModelOrder order,
+                                       double min_delay_s, double max_delay_s,
+                                       const MmfmSettings& settings, int count);
+
+}  // namespace rig::ident

@@ -1,0 +1,185 @@
+// The MMFM equation set for one configuration and its (total) least-squares solution.
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+#include <Eigen/SVD>
+
+#include "rig/ident/mmfm.hpp"
+
+namespace rig::ident {
+namespace {
+
+Eigen::VectorXd lag_axis(const signal::Correlation& c) {
+  Eigen::VectorXd tau(c.size());
+  for (Eigen::Index i = 0; i < c.size(); ++i) tau(i) = c.lag_s(i);
+  return tau;
+}
+
+// Columns i = 0..deriv of (-1)^i S^i phi_k^(i) sampled on tau, for function k of the family.
+// Hermite: (-1)^i S^i phi_k^(i) = phi_{k+i}.
+Eigen::MatrixXd function_columns(const Eigen::VectorXd& tau, double centre_s,
+                                 const MmfmSettings& st, int k, int deriv,
+                                 const Eigen::MatrixXd* hermite_cache) {
+  if (st.family == ModulatingFamily::kHermite) return hermite_cache->middleCols(k, deriv + 1);
+  const double hw = 4.0 * st.scale_s;
+  Eigen::MatrixXd d = polynomial_function_derivatives(tau, centre_s - hw, centre_s + hw,
+                                                      deriv + 1 + k, deriv);
+  for (int i = 0; i <= deriv; ++i) d.col(i) *= std::pow(-st.scale_s, i);
+  return d;
+}
+
+struct Equations {
+  Eigen::MatrixXd m;  // rows: equations, columns: scaled theta [a_n..a_0, b_m..b_0]
+};
+
+Equations build_equations(const signal::Correlation& ruu, const signal::Correlation& ryu,
+                          ModelOrder order, double delay_s, const MmfmSettings& st) {
+  const int n = order.n, m = order.m, p = n + m + 2, deriv = std::max(n, m);
+  const Eigen::VectorXd tau_y = lag_axis(ryu), tau_u = lag_axis(ruu);
+  const int rows_per_centre = st.functions;
+  Equations eq;
+  eq.m.resize(static_cast<Eigen::Index>(st.centres_s.size()) * rows_per_centre, p);
+  Eigen::Index row = 0;
+  for (double c : st.centres_s) {
+    Eigen::MatrixXd hy, hu;
+    if (st.family == ModulatingFamily::kHermite) {
+      hy = hermite_functions(tau_y, c, st.scale_s, st.functions + deriv);
+      hu = hermite_functions(tau_u, c - delay_s, st.scale_s, st.functions + deriv);
+    }
+    for (int k = 0; k < st.functions; ++k, ++row) {
+      const Eigen::MatrixXd fy = function_columns(tau_y, c, st, k, deriv, &hy);
+      const Eigen::MatrixXd fu = function_columns(tau_u, c - delay_s, st, k, deriv, &hu);
+      // <phi, r> by the trapezoid rule (the functions vanish at the window ends).
+      const Eigen::VectorXd gy = fy.transpose() * ryu.r * ryu.dt_s;
+      const Eigen::VectorXd gu = fu.transpose() * ruu.r * ruu.dt_s;
+      // Weight each equation by its function's size, not by the data (rows where the
+      // correlations vanish must stay small).
+      const double w = 1.0 / (fy.colwise().norm().maxCoeff() * std::sqrt(ryu.dt_s));
+      for (int i = 0; i <= n; ++i) eq.m(row, n - i) = gy(i) * w;
+      for (int j = 0; j <= m; ++j) eq.m(row, n + 1 + m - j) = -gu(j) * w;
+    }
+  }
+  return eq;
+}
+
+void check_axes(const signal::Correlation& ruu, const signal::Correlation& ryu) {
+  if (ruu.size() != ryu.size() || ruu.zero_index != ryu.zero_index ||
+      std::abs(ruu.dt_s - ryu.dt_s) > 1e-12 * ruu.dt_s || !(ruu.dt_s > 0.0))
+    throw std::invalid_argument(
+        "mmfm: ruu and ryu must share size, zero_index and dt_s (> 0)");
+}
+
+}  // namespace
+
+const char* to_string(MmfmSolver solver) {
+  return solver == MmfmSolver::kLeastSquares ? "least squares" : "total least squares";
+}
+
+double support_half_width_s(ModelOrder order, const MmfmSettings& settings) {
+  if (settings.family == ModulatingFamily::kPolynomial) return 4.0 * settings.scale_s;
+  return hermite_half_width(settings.functions - 1 + std::max(order.n, order.m)) *
+         settings.scale_s;
+}
+
+std::vector<double> admissible_centres(const signal::Correlation& ruu,
+                                       const signal::Correlation& ryu, ModelOrder order,
+                                       double min_delay_s, double max_delay_s,
+                                       const MmfmSettings& settings, int count) {
+  const double hw = support_half_width_s(order, settings);
+  const double y0 = ryu.lag_s(0), y1 = ryu.lag_s(ryu.size() - 1);
+  const double u0 = ruu.lag_s(0), u1 = ruu.lag_s(ruu.size() - 1);
+  double lo = std::max(y0 + hw, u0 + hw + max_delay_s);
+  double hi = std::min(y1 - hw, u1 - hw + min_delay_s);
+  if (hi < lo || count < 1) return {};
+  // Keep the centres near where r_yu carries signal (|r_yu| above 5 % of its peak).
+  const double peak = ryu.r.cwiseAbs().maxCoeff();
+  Eigen::Index first = 0, last = ryu.size() - 1;
+  while (first < last && std::abs(ryu.r(first)) < 0.05 * peak) ++first;
+  while (last > first && std::abs(ryu.r(last)) < 0.05 * peak) --last;
+  const double sig_lo = ryu.lag_s(first) - 0.5 * hw, sig_hi = ryu.lag_s(last) + 0.5 * hw;
+  if (std::max(lo, sig_lo) <= std::min(hi, sig_hi)) {
+    lo = std::max(lo, sig_lo);
+    hi = std::min(hi, sig_hi);
+  }
+  std::vector<double> centres;
+  for (int i = 0; i < count; ++i)
+    centres.push_back(count == 1 ? 0.5 * (lo + hi) : lo + (hi - lo) * i / (count - 1.0));
+  return centres;
+}
+
+signal::Correlation model_cross_correlation(const TransferFunction& tf,
+                                            const signal::Correlation& ruu) {
+  signal::Correlation out = ruu;
+  out.r = simulate(tf, ruu.r, ruu.dt_s);
+  return out;
+}
+
+MmfmResult mmfm_solve(const signal::Correlation& ruu, const signal::Correlation& ryu,
+                      ModelOrder order, double delay_s, const MmfmSettings& st) {
+  check_axes(ruu, ryu);
+  if (order.n < 1 || order.m < 0 || order.m > order.n)
+    throw std::invalid_argument("mmfm: order must satisfy n >= 1 and 0 <= m <= n");
+  const int p = order.n + order.m + 2;
+  if (st.centres_s.empty() || st.functions * static_cast<int>(st.centres_s.size()) < p - 1)
+    throw std::invalid_argument("mmfm: fewer equations than unknowns (add functions/centres)");
+  const Equations eq = build_equations(ruu, ryu, order, delay_s, st);
+  const Eigen::Index rows = eq.m.rows();
+  Eigen::VectorXd col_norm = eq.m.colwise().norm().transpose();
+  for (Eigen::Index j = 0; j < p; ++j)
+    if (col_norm(j) == 0.0) col_norm(j) = 1.0;
+  const Eigen::MatrixXd mt = eq.m * col_norm.cwiseInverse().asDiagonal();
+  const Eigen::Index ref = st.normalisation == Normalisation::kMonicDen ? 0 : p - 1;
+  Eigen::MatrixXd a(rows, p - 1);
+  a << mt.leftCols(ref), mt.rightCols(p - 1 - ref);
+  Eigen::JacobiSVD<Eigen::MatrixXd> svd_a(a, Eigen::ComputeThinU | Eigen::ComputeThinV);
+  Eigen::VectorXd theta_t(p);  // equilibrated unknowns, theta_t(ref) = 1
+  MmfmResult res;
+  if (st.solver == MmfmSolver::kLeastSquares) {
+    const Eigen::VectorXd z = svd_a.solve(-mt.col(ref));
+    theta_t << z.head(ref), 1.0, z.tail(p - 1 - ref);
+    const Eigen::VectorXd sv = svd_a.singularValues();
+    res.condition_number = sv(0) / sv(sv.size() - 1);
+  } else {
+    Eigen::JacobiSVD<Eigen::MatrixXd> svd(mt, Eigen::ComputeThinV);
+    theta_t = svd.matrixV().col(p - 1) / svd.matrixV()(ref, p - 1);
+    const Eigen::VectorXd sv = svd.singularValues();
+    res.condition_number = sv(0) / sv(p - 2);
+  }
+  const Eigen::VectorXd e = mt * theta_t;
+  const double s2 = e.squaredNorm() / std::max<Eigen::Index>(1, rows - (p - 1));
+  // cov of the free equilibrated unknowns: s^2 (A^T A)^-1 = s^2 V diag(1/sv^2) V^T.
+  const Eigen::VectorXd inv_sv2 = svd_a.singularValues().array().square().inverse().matrix();
+  const Eigen::MatrixXd cov_z =
+      s2 * svd_a.matrixV() * inv_sv2.asDiagonal() * svd_a.matrixV().transpose();
+  Eigen::MatrixXd cov_t = Eigen::MatrixXd::Zero(p, p);
+  std::vector<Eigen::Index> free_idx;
+  for (Eigen::Index j = 0; j < p; ++j)
+    if (j != ref) free_idx.push_back(j);
+  for (size_t i = 0; i < free_idx.size(); ++i)
+    for (size_t j = 0; j < free_idx.size(); ++j)
+      cov_t(free_idx[i], free_idx[j]) = cov_z(static_cast<Eigen::Index>(i),
+                                              static_cast<Eigen::Index>(j));
+  // Undo the equilibration and the time scaling: theta_i = theta_t_i / norm_i * S^power_i.
+  Eigen::VectorXd unscale(p);
+  for (int i = 0; i <= order.n; ++i) unscale(order.n - i) = std::pow(st.scale_s, i);
+  for (int j = 0; j <= order.m; ++j) unscale(order.n + 1 + order.m - j) = std::pow(st.scale_s, j);
+  unscale = unscale.cwiseQuotient(col_norm);
+  const Eigen::VectorXd theta = theta_t.cwiseProduct(unscale);
+  Eigen::MatrixXd cov = unscale.asDiagonal() * cov_t * unscale.asDiagonal();
+  const TransferFunction raw = unpack_parameters(theta, order, delay_s);
+  res.model = normalise(raw, st.normalisation, &cov);
+  res.covariance = cov;
+  res.delay_s = delay_s;
+  res.equations = static_cast<int>(rows);
+  res.equation_residual = e.norm() / std::max(1e-300, mt.col(ref).norm());
+  res.settings = st;
+  res.model_ryu = model_cross_correlation(res.model, ruu);
+  res.correlation_fit_pct = fit_percent(ryu.r, res.model_ryu.r);
+  res.derived = derived_figures(res.model, res.covariance);
+  res.parameters = parameter_table(res.model, res.covariance, res.delay_std_s);
+  return res;
+}
+
+}  // namespace rig::ident

@@ -1,0 +1,158 @@
+#include "rig/ident/transfer_function.hpp"
+
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+#include <string>
+
+#include <Eigen/Eigenvalues>
+#include <unsupported/Eigen/MatrixFunctions>
+
+namespace rig::ident {
+namespace {
+
+Eigen::VectorXd trim_leading_zeros(const Eigen::VectorXd& p) {
+  Eigen::Index first = 0;
+  while (first + 1 < p.size() && p(first) == 0.0) ++first;
+  return p.tail(p.size() - first);
+}
+
+std::complex<double> polyval(const Eigen::VectorXd& p, std::complex<double> s) {
+  std::complex<double> acc = 0.0;
+  for (Eigen::Index i = 0; i < p.size(); ++i) acc = acc * s + p(i);
+  return acc;
+}
+
+Eigen::VectorXcd roots(const Eigen::VectorXd& p_in) {
+  const Eigen::VectorXd p = trim_leading_zeros(p_in);
+  const Eigen::Index n = p.size() - 1;
+  if (n < 1) return {};
+  // Companion matrix of the monic polynomial; its eigenvalues are the roots.
+  Eigen::MatrixXd c = Eigen::MatrixXd::Zero(n, n);
+  for (Eigen::Index j = 0; j < n; ++j) c(0, j) = -p(j + 1) / p(0);
+  for (Eigen::Index i = 1; i < n; ++i) c(i, i - 1) = 1.0;
+  return Eigen::EigenSolver<Eigen::MatrixXd>(c, false).eigenvalues();
+}
+
+// exp of [[A h, B h, 0], [0, 0, h], [0, 0, 0]]: the state map over a step of length h for
+// an input that starts at v0 and rises with slope g: x+ = Phi x + Ga v0 + Gb g.
+struct FohStep {
+  Eigen::MatrixXd phi;
+  Eigen::VectorXd ga, gb;
+};
+
+FohStep foh_step(const Eigen::MatrixXd& a, const Eigen::VectorXd& b, double h) {
+  const Eigen::Index n = a.rows();
+  Eigen::MatrixXd m = Eigen::MatrixXd::Zero(n + 2, n + 2);
+  m.topLeftCorner(n, n) = a * h;
+  m.block(0, n, n, 1) = b * h;
+  m(n, n + 1) = h;
+  const Eigen::MatrixXd e = m.exp();
+  return {e.topLeftCorner(n, n), e.block(0, n, n, 1), e.block(0, n + 1, n, 1)};
+}
+
+}  // namespace
+
+std::complex<double> TransferFunction::evaluate(std::complex<double> s) const {
+  return polyval(num, s) / polyval(den, s) * std::exp(-s * delay_s);
+}
+
+std::complex<double> TransferFunction::response(double freq_hz) const {
+  return evaluate(std::complex<double>(0.0, 2.0 * M_PI * freq_hz));
+}
+
+double TransferFunction::dc_gain() const {
+  const double a0 = den(den.size() - 1);
+  const double b0 = num(num.size() - 1);
+  if (a0 == 0.0) return b0 >= 0 ? std::numeric_limits<double>::infinity()
+                                : -std::numeric_limits<double>::infinity();
+  return b0 / a0;
+}
+
+Eigen::VectorXcd TransferFunction::poles() const { return roots(den); }
+Eigen::VectorXcd TransferFunction::zeros() const { return roots(num); }
+
+bool TransferFunction::is_stable() const {
+  const Eigen::VectorXcd p = poles();
+  for (Eigen::Index i = 0; i < p.size(); ++i)
+    if (!(p(i).real() < 0.0)) return false;
+  return true;
+}
+
+int TransferFunction::order() const {
+  return static_cast<int>(trim_leading_zeros(den).size()) - 1;
+}
+int TransferFunction::numerator_order() const {
+  return static_cast<int>(trim_leading_zeros(num).size()) - 1;
+}
+bool TransferFunction::is_proper() const { return numerator_order() <= order(); }
+
+TransferFunction monic(const TransferFunction& tf) {
+  TransferFunction out{trim_leading_zeros(tf.num), trim_leading_zeros(tf.den), tf.delay_s};
+  const double an = out.den(0);
+  out.num /= an;
+  out.den /= an;
+  return out;
+}
+
+Eigen::VectorXd simulate(const TransferFunction& tf_in, const Eigen::VectorXd& u,
+                         double dt_s) {
+  if (!(dt_s > 0.0)) throw std::invalid_argument("simulate: dt_s must be > 0");
+  if (!(tf_in.delay_s >= 0.0)) throw std::invalid_argument("simulate: delay_s must be >= 0");
+  if (tf_in.den.size() == 0 || tf_in.num.size() == 0 || tf_in.den.cwiseAbs().maxCoeff() == 0)
+    throw std::invalid_argument("simulate: empty numerator or zero denominator");
+  if (!tf_in.is_proper()) throw std::invalid_argument("simulate: transfer function is improper");
+  const TransferFunction tf = monic(tf_in);
+  const Eigen::Index n = tf.den.size() - 1, N = u.size();
+  // Numerator padded to n+1 terms; direct feedthrough D and strictly proper rest c.
+  Eigen::VectorXd b = Eigen::VectorXd::Zero(n + 1);
+  b.tail(tf.num.size()) = tf.num;
+  const double d_ff = b(0);
+  const Eigen::VectorXd c = (b - d_ff * tf.den).tail(n);
+  // Delay Td = (d + f) dt: delayed input ud(t_k) = (1-f) u_{k-d} + f u_{k-d-1}.
+  const double delay_samples = tf.delay_s / dt_s;
+  const Eigen::Index d = static_cast<Eigen::Index>(std::floor(delay_samples + 1e-12));
+  double f = delay_samples - static_cast<double>(d);
+  if (f < 1e-9) f = 0.0;
+  auto u_at = [&](Eigen::Index j) { return (j >= 0 && j < N) ? u(j) : 0.0; };
+  auto ud = [&](Eigen::Index k) { return (1.0 - f) * u_at(k - d) + f * u_at(k - d - 1); };
+  Eigen::VectorXd y(N);
+  if (n == 0) {
+    for (Eigen::Index k = 0; k < N; ++k) y(k) = d_ff * ud(k);
+    return y;
+  }
+  // Controllable canonical form: x = [p^{n-1} z, ..., z], z = u / A(p).
+  Eigen::MatrixXd a = Eigen::MatrixXd::Zero(n, n);
+  a.row(0) = -tf.den.tail(n).transpose();
+  for (Eigen::Index i = 1; i < n; ++i) a(i, i - 1) = 1.0;
+  Eigen::VectorXd bin = Eigen::VectorXd::Zero(n);
+  bin(0) = 1.0;
+  const FohStep full = foh_step(a, bin, dt_s);
+  const FohStep s1 = f > 0 ? foh_step(a, bin, f * dt_s) : full;
+  const FohStep s2 = f > 0 ? foh_step(a, bin, (1.0 - f) * dt_s) : full;
+  Eigen::VectorXd x = Eigen::VectorXd::Zero(n), t(n);
+  for (Eigen::Index k = 0; k < N; ++k) {
+    const double v0 = ud(k);
+    y(k) = c.dot(x) + d_ff * v0;
+    const double v2 = ud(k + 1);
+    if (f == 0.0) {
+      t.noalias() = full.phi * x + full.ga * v0 + full.gb * ((v2 - v0) / dt_s);
+      x.swap(t);
+    } else {
+      const double v1 = u_at(k - d);  // the delayed knot inside the step
+      t.noalias() = s1.phi * x + s1.ga * v0 + s1.gb * ((v1 - v0) / (f * dt_s));
+      x.noalias() = s2.phi * t + s2.ga * v1 + s2.gb * ((v2 - v1) / ((1.0 - f) * dt_s));
+    }
+  }
+  return y;
+}
+
+double fit_percent(const Eigen::VectorXd& y, const Eigen::VectorXd& yhat) {
+  if (y.size() != yhat.size() || y.size() == 0)
+    throw std::invalid_argument("fit_percent: y and yhat must be equally long and non-empty");
+  const double den = (y.array() - y.mean()).matrix().norm();
+  if (den == 0.0) return std::numeric_limits<double>::quiet_NaN();
+  return 100.0 * (1.0 - (y - yhat).norm() / den);
+}
+
+}  // namespace rig::ident

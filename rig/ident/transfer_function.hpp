@@ -1,0 +1,59 @@
+// Continuous-time transfer functions with dead time, and their exact simulation.
+//
+//   H(s) = e^{-s Td} (b_m s^m + ... + b_0) / (a_n s^n + ... + a_0)
+//
+// Coefficients are stored highest power first (as scipy / MATLAB and the model JSON of
+// DESIGN.md section 5).
+#pragma once
+
+#include <complex>
+
+#include <Eigen/Core>
+
+namespace rig::ident {
+
+struct TransferFunction {
+  Eigen::VectorXd num;  // b_m ... b_0
+  Eigen::VectorXd den;  // a_n ... a_0
+  double delay_s = 0.0;
+
+  // H(j 2 pi f) including e^{-j 2 pi f Td}.
+  std::complex<double> response(double freq_hz) const;
+  // H(s) at any complex s (delay included).
+  std::complex<double> evaluate(std::complex<double> s) const;
+  // b_0 / a_0; +-infinity when a_0 = 0.
+  double dc_gain() const;
+  // All poles strictly in the left half plane.
+  bool is_stable() const;
+  // deg num <= deg den after trimming leading zeros.
+  bool is_proper() const;
+  Eigen::VectorXcd poles() const;
+  Eigen::VectorXcd zeros() const;
+  int order() const;           // n (after trimming)
+  int numerator_order() const; // m (after trimming)
+};
+
+// Den order n and numerator order m of a model structure.
+struct ModelOrder {
+  int n = 2;
+  int m = 0;
+};
+inline bool operator==(const ModelOrder& a, const ModelOrder& b) {
+  return a.n == b.n && a.m == b.m;
+}
+
+// The same TF scaled so that a_n = 1 (monic denominator); leading zeros trimmed.
+TransferFunction monic(const TransferFunction& tf);
+
+// Output of tf for input samples u_k = u(k dt), zero initial state, u = 0 before t = 0.
+// Exact for an input that is piecewise linear between samples (first-order hold): the
+// state-space step uses the matrix exponential of the system augmented with the input and
+// its slope, so there is no half-sample lag as with a zero-order-hold discretisation. The
+// dead time is exact too: a delay of d + f samples splits each step at the delayed knot.
+// Throws std::invalid_argument for an improper tf, dt_s <= 0 or delay_s < 0.
+Eigen::VectorXd simulate(const TransferFunction& tf, const Eigen::VectorXd& u, double dt_s);
+
+// NRMSE fit in %: 100 (1 - |y - yhat| / |y - mean(y)|) (MATLAB compare, DESIGN.md 5).
+double fit_percent(const Eigen::VectorXd& y, const Eigen::VectorXd& yhat);
+
+}  // namespace rig::ident
