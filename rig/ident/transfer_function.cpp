@@ -114,8 +114,12 @@ Eigen::VectorXd simulate(const TransferFunction& tf_in, const Eigen::VectorXd& u
   const Eigen::Index d = static_cast<Eigen::Index>(std::floor(delay_samples + 1e-12));
   double f = delay_samples - static_cast<double>(d);
   if (f < 1e-9) f = 0.0;
+  // u(t) = 0 for t < 0 and jumps to u_0 at t = 0, so the delayed input is 0 before Td.
   auto u_at = [&](Eigen::Index j) { return (j >= 0 && j < N) ? u(j) : 0.0; };
-  auto ud = [&](Eigen::Index k) { return (1.0 - f) * u_at(k - d) + f * u_at(k - d - 1); };
+  auto ud = [&](Eigen::Index k) {
+    if (k - d < 0 || (f > 0.0 && k - d - 1 < 0)) return 0.0;
+    return (1.0 - f) * u_at(k - d) + f * u_at(k - d - 1);
+  };
   Eigen::VectorXd y(N);
   if (n == 0) {
     for (Eigen::Index k = 0; k < N; ++k) y(k) = d_ff * ud(k);
@@ -139,8 +143,9 @@ Eigen::VectorXd simulate(const TransferFunction& tf_in, const Eigen::VectorXd& u
       t.noalias() = full.phi * x + full.ga * v0 + full.gb * ((v2 - v0) / dt_s);
       x.swap(t);
     } else {
-      const double v1 = u_at(k - d);  // the delayed knot inside the step
-      t.noalias() = s1.phi * x + s1.ga * v0 + s1.gb * ((v1 - v0) / (f * dt_s));
+      // The delayed knot inside the step: left value (0 before the input starts), right value.
+      const double v1l = k - d - 1 < 0 ? 0.0 : u_at(k - d), v1 = u_at(k - d);
+      t.noalias() = s1.phi * x + s1.ga * v0 + s1.gb * ((v1l - v0) / (f * dt_s));
       x.noalias() = s2.phi * t + s2.ga * v1 + s2.gb * ((v2 - v1) / ((1.0 - f) * dt_s));
     }
   }

@@ -1,0 +1,85 @@
+#include <cmath>
+
+#include <gtest/gtest.h>
+
+#include "analytic_correlations.hpp"
+#include "rig/ident/transfer_function.hpp"
+
+namespace rig::ident {
+namespace {
+
+using testing::make_tf;
+
+Eigen::VectorXd time_axis(Eigen::Index n, double dt) {
+  return Eigen::VectorXd::LinSpaced(n, 0.0, static_cast<double>(n - 1) * dt);
+}
+
+TEST(TransferFunction, RampThroughFirstOrderIsExact) {
+  // y = t - 1 + e^{-t} for u = t through 1/(s+1).
+  const double dt = 0.1;
+  const Eigen::VectorXd t = time_axis(200, dt);
+  const Eigen::VectorXd y = simulate(make_tf({1.0}, {1.0, 1.0}), t, dt);
+  for (Eigen::Index k = 0; k < t.size(); ++k)
+    EXPECT_NEAR(y(k), t(k) - 1.0 + std::exp(-t(k)), 1e-11) << "k=" << k;
+}
+
+TEST(TransferFunction, FractionalDelayIsExact) {
+  const double dt = 0.1, td = 0.237;  // 2.37 samples
+  const Eigen::VectorXd t = time_axis(200, dt);
+  const Eigen::VectorXd y = simulate(make_tf({1.0}, {1.0, 1.0}, td), t, dt);
+  for (Eigen::Index k = 0; k < t.size(); ++k) {
+    const double s = t(k) - td;
+    EXPECT_NEAR(y(k), s > 0 ? s - 1.0 + std::exp(-s) : 0.0, 1e-11) << "k=" << k;
+  }
+}
+
+TEST(TransferFunction, DelayedStepThroughSecondOrderIsExact) {
+  // 10/(s^2+2s+10): step response 1 - e^{-t}(cos 3t + sin(3t)/3), delayed by 5.5 samples.
+  const double dt = 0.01, td = 0.055;
+  const Eigen::VectorXd u = Eigen::VectorXd::Ones(600);
+  const Eigen::VectorXd y = simulate(make_tf({10.0}, {1.0, 2.0, 10.0}, td), u, dt);
+  for (Eigen::Index k = 0; k < u.size(); ++k) {
+    const double s = static_cast<double>(k) * dt - td;
+    const double exact =
+        s > 0 ? 1.0 - std::exp(-s) * (std::cos(3 * s) + std::sin(3 * s) / 3.0) : 0.0;
+    EXPECT_NEAR(y(k), exact, 1e-10) << "k=" << k;
+  }
+}
+
+TEST(TransferFunction, BiproperStepHasFeedthrough) {
+  // (2s+1)/(s+1) = 2 - 1/(s+1): step response 1 + e^{-t}.
+  const double dt = 0.05;
+  const Eigen::VectorXd t = time_axis(100, dt);
+  const Eigen::VectorXd y =
+      simulate(make_tf({2.0, 1.0}, {1.0, 1.0}), Eigen::VectorXd::Ones(100), dt);
+  for (Eigen::Index k = 0; k < t.size(); ++k) EXPECT_NEAR(y(k), 1.0 + std::exp(-t(k)), 1e-11);
+}
+
+TEST(TransferFunction, ResponseGainPolesAndProperness) {
+  const TransferFunction tf = make_tf({2.0}, {1.0, 1.0}, 0.1);
+  const std::complex<double> h = tf.response(1.0 / (2.0 * M_PI));  // omega = 1
+  EXPECT_NEAR(std::abs(h), 2.0 / std::sqrt(2.0), 1e-12);
+  EXPECT_NEAR(std::arg(h), -M_PI / 4.0 - 0.1, 1e-12);
+  EXPECT_DOUBLE_EQ(tf.dc_gain(), 2.0);
+  EXPECT_TRUE(tf.is_stable());
+  EXPECT_TRUE(tf.is_proper());
+  EXPECT_FALSE(make_tf({1.0}, {1.0, -0.5, 2.0}).is_stable());
+  EXPECT_FALSE(make_tf({1.0, 0.0, 1.0}, {1.0, 1.0}).is_proper());
+  const Eigen::VectorXcd p = make_tf({1.0}, {1.0, 2.0, 10.0}).poles();
+  ASSERT_EQ(p.size(), 2);
+  EXPECT_NEAR(p(0).real(), -1.0, 1e-12);
+  EXPECT_NEAR(std::abs(p(0).imag()), 3.0, 1e-12);
+  EXPECT_THROW(simulate(make_tf({1.0, 0.0, 1.0}, {1.0, 1.0}), Eigen::VectorXd::Ones(3), 0.1),
+               std::invalid_argument);
+}
+
+TEST(TransferFunction, FitPercentIsNrmse) {
+  const Eigen::VectorXd y = Eigen::VectorXd::LinSpaced(50, -1.0, 3.0);
+  EXPECT_DOUBLE_EQ(fit_percent(y, y), 100.0);
+  EXPECT_NEAR(fit_percent(y, Eigen::VectorXd::Constant(50, y.mean())), 0.0, 1e-12);
+  const Eigen::VectorXd half = y.mean() + 0.5 * (y.array() - y.mean());
+  EXPECT_NEAR(fit_percent(y, half), 50.0, 1e-12);
+}
+
+}  // namespace
+}  // namespace rig::ident
