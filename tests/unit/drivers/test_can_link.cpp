@@ -1,0 +1,198 @@
+// The CAN GovernorLink over can+udp against a small J1939 node in a thread (the same
+// transport and codecs plantsim's CAN node uses).
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <mutex>
+#include <thread>
+#include <vector>
+
+#include "drivers/can/j1939.hpp"
+#include "drivers/can/transport.hpp"
+#include "drivers/open_link.hpp"
+
+namespace j = drivers::j1939;
+using drivers::LinkErrorKind;
+using drivers::LinkOptions;
+using drivers::can::CanRole;
+using namespace std::chrono_literals;
+
+namespace {
+
+// Lockstep node: on 0xFF52 {n} sends n x (0xFF51, EEC1) and one GTACP; power follows the bias.
+class TestNode {
+ public:
+  TestNode() {
+    auto ep = drivers::can::open_can_endpoint(
+        drivers::parse_link_uri("can+udp://127.0.0.1:0").value(), CanRole::kNode);
+    EXPECT_TRUE(ep) << ep.error().message();
+    ep_ = std::move(ep.value());
+    thread_ = std::thread([this] { run(); });
+  }
+  ~TestNode() { stop(); }
+  void stop() {
+    stop_ = true;
+    if (thread_.joinable()) thread_.join();
+    ep_.reset();
+  }
+  int port() const { return ep_->local_port(); }
+  std::vector<j::RigCommand> commands() const {
+    std::lock_guard lock(mutex_);
+    return commands_;
+  }
+  int command_errors() const { return command_errors_; }
+
+  std::atomic<bool> freeze_counter{false};
+  std::atomic<bool> corrupt{false};
+  std::atomic<bool> silent{false};
+
+ private:
+  void run() {
+    std::optional<std::uint8_t> previous;
+    while (!stop_) {
+      auto f = ep_->receive(10ms);
+      if (!f) continue;
+      if (j::pgn_of(*f) == j::kPgnRigCommand) {
+        auto c = j::decode_rig_command(*f, previous);  // checks the heartbeat counter
+        if (!c) {
+          ++command_errors_;
+          continue;
+        }
+        previous = c->counter;
+        std::lock_guard lock(mutex_);
+        commands_.push_back(*c);
+        bias_pct_ = c->enable ? c->bias_pct : 0.0;
+      } else if (auto l = j::decode_lockstep(*f); l && !silent) {
+        for (int k = 0; k < l->ticks; ++k) tick();
+        (void)ep_->send(j::encode_gtacp({power_w(), 0.0}));
+      }
+    }
+  }
+  double power_w() const { return 3.5e6 + bias_pct_ * 46.0e3; }
+  void tick() {
+    if (!freeze_counter) ++counter_;
+    can_frame s = j::encode_plant_sample({power_w(), counter_, 0x07});
+    if (corrupt) s.data[0] ^= 0x10;
+    (void)ep_->send(s);
+    (void)ep_->send(j::encode_eec1({600.5, 70.0}));
+  }
+
+  std::unique_ptr<drivers::can::CanEndpoint> ep_;
+  std::thread thread_;
+  std::atomic<bool> stop_{false};
+  mutable std::mutex mutex_;
+  std::vector<j::RigCommand> commands_;
+  std::atomic<int> command_errors_{0};
+  double bias_pct_ = 0.0;
+  std::uint16_t counter_ = 100;
+};
+
+std::unique_ptr<drivers::GovernorLink> connect(const TestNode& node) {
+  LinkOptions o;
+  o.lockstep = true;
+  o.response_timeout = 200ms;
+  o.ramp_rate_pct_per_s = 25.0;
+  o.plant_tick = 1ms;
+  auto link = drivers::open_link("can+udp://127.0.0.1:" + std::to_string(node.port()), o);
+  EXPECT_TRUE(link) << link.error().message();
+  auto r = link.value()->configure();
+  EXPECT_TRUE(r) << r.error().message();
+  return std::move(link.value());
+}
+
+}  // namespace
+
+TEST(CanLink, LockstepCycleOverUdp) {
+  TestNode node;
+  auto link = connect(node);
+  ASSERT_TRUE(link->activate());
+  ASSERT_TRUE(link->write(0.5));
+  ASSERT_TRUE(link->advance(1));
+  auto first = link->read();
+  ASSERT_TRUE(first) << first.error().message();
+  EXPECT_EQ(first->counter, 101);
+  ASSERT_TRUE(link->write(-1.25));
+  ASSERT_TRUE(link->advance(4));
+  auto s = link->read();
+  ASSERT_TRUE(s) << s.error().message();
+  EXPECT_EQ(s->counter, 105);
+  EXPECT_DOUBLE_EQ(s->power_kw, 3500.0 - 1.25 * 46.0);
+  EXPECT_DOUBLE_EQ(s->speed_rpm, 600.5);
+  EXPECT_EQ(s->status, 0x07);
+  EXPECT_DOUBLE_EQ(s->plant_time_s, 0.105);
+
+  const auto c = node.commands();
+  ASSERT_EQ(c.size(), 3u);
+  EXPECT_TRUE(c[0].enable);
+  EXPECT_DOUBLE_EQ(c[1].bias_pct, 0.5);
+  EXPECT_DOUBLE_EQ(c[2].bias_pct, -1.25);
+  EXPECT_EQ(node.command_errors(), 0);  // heartbeat counter +1 per frame, checksums good
+}
+
+TEST(CanLink, DeactivateRampsAndClearsEnable) {
+  TestNode node;
+  auto link = connect(node);
+  ASSERT_TRUE(link->activate());
+  ASSERT_TRUE(link->write(1.0));
+  ASSERT_TRUE(link->deactivate());
+  std::this_thread::sleep_for(20ms);  // let the node take the last datagram
+  const auto c = node.commands();
+  ASSERT_EQ(c.size(), 2u + 2u + 1u);  // 1.0 % in 0.5 % steps, then disable
+  EXPECT_DOUBLE_EQ(c[2].bias_pct, 0.5);
+  EXPECT_DOUBLE_EQ(c[3].bias_pct, 0.0);
+  EXPECT_TRUE(c[3].enable);
+  EXPECT_FALSE(c[4].enable);
+  EXPECT_EQ(node.command_errors(), 0);
+}
+
+TEST(CanLink, CorruptFrameIsChecksumError) {
+  TestNode node;
+  auto link = connect(node);
+  node.corrupt = true;
+  ASSERT_TRUE(link->advance(1));
+  auto s = link->read();
+  ASSERT_FALSE(s);
+  EXPECT_EQ(s.error().kind, LinkErrorKind::kChecksum);
+  EXPECT_EQ(s.error().where, "PGN 0xFF51");
+}
+
+TEST(CanLink, FrozenCounterIsStale) {
+  TestNode node;
+  auto link = connect(node);
+  ASSERT_TRUE(link->advance(1));
+  ASSERT_TRUE(link->read());
+  node.freeze_counter = true;
+  ASSERT_TRUE(link->advance(2));
+  auto s = link->read();
+  ASSERT_FALSE(s);
+  EXPECT_EQ(s.error().kind, LinkErrorKind::kStale) << s.error().message();
+}
+
+TEST(CanLink, SilentNodeIsTimeout) {
+  TestNode node;
+  auto link = connect(node);
+  node.silent = true;
+  ASSERT_TRUE(link->advance(1));
+  auto s = link->read();
+  ASSERT_FALSE(s);
+  EXPECT_EQ(s.error().kind, LinkErrorKind::kTimeout) << s.error().message();
+}
+
+TEST(CanLink, NodeGoneIsLinkLost) {
+  TestNode node;
+  auto link = connect(node);
+  node.stop();
+  ASSERT_TRUE(link->write(0.0));  // UDP: the refusal comes back asynchronously
+  auto s = link->read();
+  ASSERT_FALSE(s);
+  EXPECT_EQ(s.error().kind, LinkErrorKind::kLinkLost) << s.error().message();
+}
+
+TEST(CanLink, SocketcanUnavailableSurfacesAtConfigure) {
+  auto link = drivers::open_link("can+socketcan:vcan0");
+  ASSERT_TRUE(link);
+  auto r = link.value()->configure();
+  if (r) GTEST_SKIP() << "this host has vcan0";
+  EXPECT_EQ(r.error().kind, LinkErrorKind::kUnavailable);
+  EXPECT_NE(r.error().message().find("CAN unavailable on this host"), std::string::npos);
+}
