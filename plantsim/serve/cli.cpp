@@ -1,0 +1,78 @@
+// Command-line parsing for `plantsim` (CLI11). Everything here only fills ServeOptions;
+// serve() in app.cpp does the work.
+#include <CLI/CLI.hpp>
+#include <fmt/format.h>
+
+#include <iostream>
+
+#include "plantsim/serve/app.hpp"
+#include "plantsim/serve/endpoint.hpp"
+
+namespace plantsim::serve {
+namespace {
+
+void add_options(CLI::App& app, ServeOptions& o, std::string& clock, std::string& tick) {
+  app.add_option("--preset", o.plant.preset, "Plant preset")->default_str("stornoway");
+  app.add_option("--config", o.plant.config, "Plant TOML (overrides --preset)");
+  app.add_option("--modbus", o.modbus,
+                 "Modbus endpoint: tcp://HOST:PORT (port 0 = ephemeral) or "
+                 "rtu:DEVICE?baud=19200[&parity=N][&unit=1] (default tcp://127.0.0.1:1502)");
+  app.add_option("--can", o.can, "CAN endpoint: udp://HOST:PORT or socketcan:IFACE");
+  app.add_option("--clock", clock, "realtime (plant follows the monotonic clock) or lockstep "
+                                   "(plant advances only when the rig writes holding 100 / "
+                                   "sends PGN 0xFF52)")
+      ->default_str("realtime");
+  app.add_option("--tick", tick, "Plant tick, e.g. 1ms, 500us")->default_str("1ms");
+  app.add_option("--fault", o.plant.faults, "Parameter change NAME=VALUE@t=SECONDS (repeatable)");
+  app.add_option("--seed", o.plant.seed, "Seed of the plant's noise")->default_str("1");
+  app.add_option("--duration", o.duration_s, "Stop after this much plant time (seconds)");
+  app.add_option("--linearise", o.linearise_to,
+                 "Write the linearised bias-to-power transfer function JSON and exit");
+  app.add_flag("--readout", o.readout, "Print power, speed and bias once a second");
+}
+
+// Checks that CLI11 cannot express, each with a one-line message.
+void validate(ServeOptions& o, const std::string& clock, const std::string& tick) {
+  if (clock == "realtime") {
+    o.clock = ClockMode::kRealtime;
+  } else if (clock == "lockstep") {
+    o.clock = ClockMode::kLockstep;
+  } else {
+    throw ConfigError(fmt::format("--clock '{}': expected realtime or lockstep", clock));
+  }
+  o.plant.tick = parse_tick(tick);
+  if (o.duration_s && !(*o.duration_s > 0.0 && *o.duration_s < 1e7)) {
+    throw ConfigError(fmt::format("--duration {}: expected seconds > 0", *o.duration_s));
+  }
+  if (o.modbus) parse_modbus_endpoint(*o.modbus);
+  if (o.can) parse_can_endpoint(*o.can);
+  if (!o.modbus && !o.can) o.modbus = "tcp://127.0.0.1:1502";
+}
+
+}  // namespace
+
+int plantsim_main(int argc, char** argv, const PlantHooks& hooks) {
+  CLI::App app{"plantsim: emulated governor / diesel engine / alternator plant serving the "
+               "rig's Modbus and CAN maps"};
+  ServeOptions options;
+  std::string clock = "realtime";
+  std::string tick = "1ms";
+  add_options(app, options, clock, tick);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::CallForHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::ParseError& e) {
+    std::cerr << "plantsim: " << e.what() << " (see --help)\n";
+    return 2;
+  }
+  try {
+    validate(options, clock, tick);
+  } catch (const ConfigError& e) {
+    std::cerr << "plantsim: " << e.what() << "\n";
+    return 2;
+  }
+  return serve(options, hooks);
+}
+
+}  // namespace plantsim::serve
