@@ -31,10 +31,23 @@ ModbusTestServer::ModbusTestServer(bool lockstep, int input_count)
   thread_ = std::thread([this] { run(); });
 }
 
+ModbusTestServer::ModbusTestServer(const std::string& rtu_device, int baud)
+    : lockstep_(true), input_count_(map::kInputCount) {
+  modbus_t* ctx = modbus_new_rtu(rtu_device.c_str(), baud, 'N', 8, 1);
+  ctx_ = ctx;
+  mapping_ = modbus_mapping_new(0, 0, map::kHoldingCount, map::kInputCount);
+  if (!ctx || !mapping_ || modbus_set_slave(ctx, map::kDefaultUnit) != 0 ||
+      modbus_connect(ctx) != 0) {
+    throw std::runtime_error("RTU test server setup failed on " + rtu_device);
+  }
+  modbus_set_indication_timeout(ctx, 0, 20000);
+  thread_ = std::thread([this] { serve_client(); });
+}
+
 ModbusTestServer::~ModbusTestServer() {
   stop_ = true;
   thread_.join();
-  ::close(listen_fd_);
+  if (listen_fd_ >= 0) ::close(listen_fd_);
   modbus_mapping_free(static_cast<modbus_mapping_t*>(mapping_));
   modbus_close(static_cast<modbus_t*>(ctx_));
   modbus_free(static_cast<modbus_t*>(ctx_));
@@ -64,7 +77,11 @@ void ModbusTestServer::serve_client() {
   while (!stop_) {
     const int rc = modbus_receive(ctx, query);
     if (rc < 0 && errno == ETIMEDOUT) continue;
-    if (rc < 0) return;  // client closed
+    if (rc < 0 && listen_fd_ < 0) {  // RTU: a garbled frame, keep listening
+      std::this_thread::sleep_for(std::chrono::milliseconds(1));
+      continue;
+    }
+    if (rc < 0) return;  // TCP: client closed
     if (rc == 0) continue;
     if (close_after_requests == 0) return;  // link loss: drop the connection unanswered
     if (close_after_requests > 0) --close_after_requests;

@@ -7,6 +7,7 @@
 #include <atomic>
 #include <cstdint>
 #include <mutex>
+#include <string>
 #include <thread>
 #include <vector>
 
@@ -16,6 +17,8 @@ class ModbusTestServer {
  public:
   // lockstep: the counter moves only on writes to holding 100; otherwise +1 per read.
   explicit ModbusTestServer(bool lockstep, int input_count = 10);
+  // Modbus RTU server (lockstep, unit 1) on a serial device, e.g. one end of a socat pty pair.
+  ModbusTestServer(const std::string& rtu_device, int baud);
   ~ModbusTestServer();
   int port() const { return port_; }
 
