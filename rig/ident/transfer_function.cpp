@@ -95,22 +95,14 @@ TransferFunction monic(const TransferFunction& tf) {
   return out;
 }
 
-Eigen::VectorXd simulate(const TransferFunction& tf_in, const Eigen::VectorXd& u,
-                         double dt_s) {
+Eigen::MatrixXd filtered_derivatives(const Eigen::VectorXd& den_in, const Eigen::VectorXd& u,
+                                     double dt_s, double delay_s) {
   if (!(dt_s > 0.0)) throw std::invalid_argument("simulate: dt_s must be > 0");
-  if (!(tf_in.delay_s >= 0.0)) throw std::invalid_argument("simulate: delay_s must be >= 0");
-  if (tf_in.den.size() == 0 || tf_in.num.size() == 0 || tf_in.den.cwiseAbs().maxCoeff() == 0)
-    throw std::invalid_argument("simulate: empty numerator or zero denominator");
-  if (!tf_in.is_proper()) throw std::invalid_argument("simulate: transfer function is improper");
-  const TransferFunction tf = monic(tf_in);
-  const Eigen::Index n = tf.den.size() - 1, N = u.size();
-  // Numerator padded to n+1 terms; direct feedthrough D and strictly proper rest c.
-  Eigen::VectorXd b = Eigen::VectorXd::Zero(n + 1);
-  b.tail(tf.num.size()) = tf.num;
-  const double d_ff = b(0);
-  const Eigen::VectorXd c = (b - d_ff * tf.den).tail(n);
+  if (!(delay_s >= 0.0)) throw std::invalid_argument("simulate: delay_s must be >= 0");
+  const Eigen::VectorXd den = trim_leading_zeros(den_in) / trim_leading_zeros(den_in)(0);
+  const Eigen::Index n = den.size() - 1, N = u.size();
   // Delay Td = (d + f) dt: delayed input ud(t_k) = (1-f) u_{k-d} + f u_{k-d-1}.
-  const double delay_samples = tf.delay_s / dt_s;
+  const double delay_samples = delay_s / dt_s;
   const Eigen::Index d = static_cast<Eigen::Index>(std::floor(delay_samples + 1e-12));
   double f = delay_samples - static_cast<double>(d);
   if (f < 1e-9) f = 0.0;
@@ -120,24 +112,26 @@ Eigen::VectorXd simulate(const TransferFunction& tf_in, const Eigen::VectorXd& u
     if (k - d < 0 || (f > 0.0 && k - d - 1 < 0)) return 0.0;
     return (1.0 - f) * u_at(k - d) + f * u_at(k - d - 1);
   };
-  Eigen::VectorXd y(N);
+  Eigen::MatrixXd out(N, n + 1);
   if (n == 0) {
-    for (Eigen::Index k = 0; k < N; ++k) y(k) = d_ff * ud(k);
-    return y;
+    for (Eigen::Index k = 0; k < N; ++k) out(k, 0) = ud(k);
+    return out;
   }
   // Controllable canonical form: x = [p^{n-1} z, ..., z], z = u / A(p).
   Eigen::MatrixXd a = Eigen::MatrixXd::Zero(n, n);
-  a.row(0) = -tf.den.tail(n).transpose();
+  a.row(0) = -den.tail(n).transpose();
   for (Eigen::Index i = 1; i < n; ++i) a(i, i - 1) = 1.0;
   Eigen::VectorXd bin = Eigen::VectorXd::Zero(n);
   bin(0) = 1.0;
   const FohStep full = foh_step(a, bin, dt_s);
   const FohStep s1 = f > 0 ? foh_step(a, bin, f * dt_s) : full;
   const FohStep s2 = f > 0 ? foh_step(a, bin, (1.0 - f) * dt_s) : full;
+  const Eigen::RowVectorXd top = a.row(0);
   Eigen::VectorXd x = Eigen::VectorXd::Zero(n), t(n);
   for (Eigen::Index k = 0; k < N; ++k) {
     const double v0 = ud(k);
-    y(k) = c.dot(x) + d_ff * v0;
+    out(k, 0) = v0 + top.dot(x);  // p^n z = u - sum a_i p^i z
+    out.row(k).tail(n) = x.transpose();
     const double v2 = ud(k + 1);
     if (f == 0.0) {
       t.noalias() = full.phi * x + full.ga * v0 + full.gb * ((v2 - v0) / dt_s);
@@ -149,7 +143,20 @@ Eigen::VectorXd simulate(const TransferFunction& tf_in, const Eigen::VectorXd& u
       x.noalias() = s2.phi * t + s2.ga * v1 + s2.gb * ((v2 - v1) / ((1.0 - f) * dt_s));
     }
   }
-  return y;
+  return out;
+}
+
+Eigen::VectorXd simulate(const TransferFunction& tf_in, const Eigen::VectorXd& u,
+                         double dt_s) {
+  if (tf_in.den.size() == 0 || tf_in.num.size() == 0 || tf_in.den.cwiseAbs().maxCoeff() == 0)
+    throw std::invalid_argument("simulate: empty numerator or zero denominator");
+  if (!tf_in.is_proper()) throw std::invalid_argument("simulate: transfer function is improper");
+  const TransferFunction tf = monic(tf_in);
+  const Eigen::Index n = tf.den.size() - 1;
+  // y = B(p) z with z = u(t - Td) / A(p): numerator padded to n+1 terms.
+  Eigen::VectorXd b = Eigen::VectorXd::Zero(n + 1);
+  b.tail(tf.num.size()) = tf.num;
+  return filtered_derivatives(tf.den, u, dt_s, tf.delay_s) * b;
 }
 
 double fit_percent(const Eigen::VectorXd& y, const Eigen::VectorXd& yhat) {

@@ -53,6 +53,13 @@ TransferFunction monic(const TransferFunction& tf);
 // Throws std::invalid_argument for an improper tf, dt_s <= 0 or delay_s < 0.
 Eigen::VectorXd simulate(const TransferFunction& tf, const Eigen::VectorXd& u, double dt_s);
 
+// Filtered derivatives of a delayed signal: column i (i = 0..n) holds p^{n-i}/A(p) u(t - Td)
+// for the denominator den = A (any scale; n = its order), zero initial state, the input
+// piecewise linear as in simulate(). These are the state-variable-filter outputs used by
+// SRIVC and the output sensitivities; simulate() is B(p) applied to them.
+Eigen::MatrixXd filtered_derivatives(const Eigen::VectorXd& den, const Eigen::VectorXd& u,
+                                     double dt_s, double delay_s);
+
 // NRMSE fit in %: 100 (1 - |y - yhat| / |y - mean(y)|) (MATLAB compare, DESIGN.md 5).
 double fit_percent(const Eigen::VectorXd& y, const Eigen::VectorXd& yhat);
 

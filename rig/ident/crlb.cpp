@@ -1,0 +1,32 @@
+#include "rig/ident/crlb.hpp"
+
+#include <cmath>
+#include <stdexcept>
+
+#include <Eigen/LU>
+
+#include "rig/ident/srivc.hpp"
+
+namespace rig::ident {
+
+CramerRaoBound cramer_rao_bound(const TransferFunction& true_tf, const Eigen::VectorXd& u,
+                                double dt_s, double noise_variance) {
+  if (!(noise_variance > 0.0)) throw std::invalid_argument("cramer_rao_bound: noise_variance must be > 0");
+  const TransferFunction tf = monic(true_tf);
+  const int n = tf.order(), m = static_cast<int>(tf.num.size()) - 1;
+  const Eigen::MatrixXd jac = output_sensitivities(tf, u, dt_s);
+  CramerRaoBound out;
+  out.covariance = noise_variance * (jac.transpose() * jac).inverse();
+  out.std_dev = out.covariance.diagonal().cwiseMax(0.0).cwiseSqrt();
+  const ModelOrder order{n, m};
+  const std::vector<std::string> names = parameter_names(order);
+  out.names.assign(names.begin() + 1, names.end());  // a_n = 1 is not a parameter
+  out.names.push_back("delay_s");
+  const Eigen::Index p = n + m + 2;
+  Eigen::MatrixXd cov_full = Eigen::MatrixXd::Zero(p, p);
+  cov_full.bottomRightCorner(p - 1, p - 1) = out.covariance.topLeftCorner(p - 1, p - 1);
+  out.derived = derived_figures(tf, cov_full);
+  return out;
+}
+
+}  // namespace rig::ident

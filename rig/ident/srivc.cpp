@@ -1,0 +1,229 @@
+// SRIVC (Young 1976; Garnier, Mensler and Richard 2003; CONTSID srivc).
+#include "rig/ident/srivc.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+
+#include <Eigen/LU>
+#include <Eigen/QR>
+
+namespace rig::ident {
+namespace {
+
+constexpr double kGolden = 0.6180339887498949;
+
+// (p + lambda)^n expanded, highest power first.
+Eigen::VectorXd svf_denominator(int n, double lambda) {
+  Eigen::VectorXd c = Eigen::VectorXd::Zero(n + 1);
+  c(0) = 1.0;
+  for (int k = 0; k < n; ++k)
+    for (int i = k + 1; i >= 1; --i) c(i) += lambda * c(i - 1);
+  return c;
+}
+
+// Reflect right-half-plane roots so the prefilter 1/A stays stable.
+Eigen::VectorXd stabilised(const Eigen::VectorXd& den) {
+  TransferFunction tf{Eigen::VectorXd::Ones(1), den, 0.0};
+  const Eigen::VectorXcd p = tf.poles();
+  bool ok = true;
+  for (Eigen::Index i = 0; i < p.size(); ++i) ok = ok && p(i).real() < 0.0;
+  if (ok) return den;
+  Eigen::VectorXcd poly = Eigen::VectorXcd::Zero(p.size() + 1);
+  poly(0) = 1.0;
+  for (Eigen::Index k = 0; k < p.size(); ++k) {
+    const std::complex<double> r(-std::abs(p(k).real()) - 1e-6, p(k).imag());
+    for (Eigen::Index i = k + 1; i >= 1; --i) poly(i) -= r * poly(i - 1);
+  }
+  return poly.real();
+}
+
+struct IvStep {
+  Eigen::VectorXd theta;  // [a_{n-1}..a_0, b_m..b_0]
+  bool ok = false;
+};
+
+// One (I)V solve with prefilter 1/A; instruments from x_hat when given, else plain LS.
+IvStep iv_step(const Eigen::VectorXd& a_filter, const Eigen::VectorXd& u,
+               const Eigen::VectorXd& y, const Eigen::VectorXd* x_hat, double dt_s,
+               ModelOrder order, double delay_s) {
+  const int n = order.n, m = order.m;
+  const Eigen::MatrixXd yf = filtered_derivatives(a_filter, y, dt_s, 0.0);
+  const Eigen::MatrixXd uf = filtered_derivatives(a_filter, u, dt_s, delay_s);
+  const Eigen::MatrixXd xf = x_hat ? filtered_derivatives(a_filter, *x_hat, dt_s, 0.0) : yf;
+  // Skip the filters' start-up transient (unknown initial conditions of the record).
+  const Eigen::Index skip = std::min<Eigen::Index>(y.size() / 10, 200);
+  const Eigen::Index rows = y.size() - skip;
+  Eigen::MatrixXd phi(rows, n + m + 1), zeta(rows, n + m + 1);
+  phi.leftCols(n) = -yf.block(skip, 1, rows, n);
+  zeta.leftCols(n) = -xf.block(skip, 1, rows, n);
+  phi.rightCols(m + 1) = uf.block(skip, n - m, rows, m + 1);
+  zeta.rightCols(m + 1) = phi.rightCols(m + 1);
+  const Eigen::VectorXd target = yf.col(0).tail(rows);
+  const Eigen::MatrixXd zp = zeta.transpose() * phi;
+  Eigen::FullPivLU<Eigen::MatrixXd> lu(zp);
+  if (!lu.isInvertible()) return {};
+  return {lu.solve(zeta.transpose() * target), true};
+}
+
+TransferFunction tf_from(const Eigen::VectorXd& theta, ModelOrder order, double delay_s) {
+  TransferFunction tf;
+  tf.den.resize(order.n + 1);
+  tf.den << 1.0, theta.head(order.n);
+  tf.num = theta.tail(order.m + 1);
+  tf.delay_s = delay_s;
+  return tf;
+}
+
+double output_sse(const TransferFunction& tf, const Eigen::VectorXd& u, const Eigen::VectorXd& y,
+                  double dt_s) {
+  if (!tf.is_stable()) return std::numeric_limits<double>::infinity();
+  const double sse = (y - simulate(tf, u, dt_s)).squaredNorm();
+  return std::isfinite(sse) ? sse : std::numeric_limits<double>::infinity();
+}
+
+struct FixedDelayFit {
+  TransferFunction tf;
+  double sse = std::numeric_limits<double>::infinity();
+  int iterations = 0;
+  bool converged = false;
+};
+
+// SRIVC at a fixed delay from the denominator a_start.
+FixedDelayFit srivc_fixed(const Eigen::VectorXd& u, const Eigen::VectorXd& y, double dt_s,
+                          ModelOrder order, double delay_s, const Eigen::VectorXd& a_start,
+                          const SrivcOptions& opt) {
+  FixedDelayFit fit;
+  IvStep st = iv_step(a_start, u, y, nullptr, dt_s, order, delay_s);
+  if (!st.ok) return fit;
+  Eigen::VectorXd theta = st.theta;
+  for (int it = 1; it <= opt.max_iterations; ++it) {
+    TransferFunction tf = tf_from(theta, order, delay_s);
+    tf.den = stabilised(tf.den);
+    const Eigen::VectorXd x_hat = simulate(tf, u, dt_s);
+    const IvStep next = iv_step(tf.den, u, y, &x_hat, dt_s, order, delay_s);
+    fit.iterations = it;
+    if (!next.ok) break;
+    const double change = (next.theta - theta).norm() / std::max(1e-300, theta.norm());
+    theta = next.theta;
+    if (change < opt.tolerance) {
+      fit.converged = true;
+      break;
+    }
+  }
+  fit.tf = tf_from(theta, order, delay_s);
+  fit.sse = output_sse(fit.tf, u, y, dt_s);
+  return fit;
+}
+
+// Start: SVF least squares over a few filter cut-offs, keeping the best output error.
+Eigen::VectorXd initial_denominator(const Eigen::VectorXd& u, const Eigen::VectorXd& y,
+                                    double dt_s, ModelOrder order, double delay_s,
+                                    const SrivcOptions& opt) {
+  std::vector<double> lambdas;
+  if (opt.svf_cutoff_rad_s > 0) {
+    lambdas.push_back(opt.svf_cutoff_rad_s);
+  } else {
+    for (double k : {0.02, 0.05, 0.12}) lambdas.push_back(2.0 * M_PI * k / dt_s);
+  }
+  Eigen::VectorXd best = svf_denominator(order.n, lambdas.front());
+  double best_sse = std::numeric_limits<double>::infinity();
+  for (double l : lambdas) {
+    const Eigen::VectorXd a = svf_denominator(order.n, l);
+    const IvStep st = iv_step(a, u, y, nullptr, dt_s, order, delay_s);
+    if (!st.ok) continue;
+    TransferFunction tf = tf_from(st.theta, order, delay_s);
+    tf.den = stabilised(tf.den);
+    const double sse = output_sse(tf, u, y, dt_s);
+    if (sse < best_sse) best_sse = sse, best = tf.den;
+  }
+  return best;
+}
+
+}  // namespace
+
+Eigen::MatrixXd output_sensitivities(const TransferFunction& tf_in, const Eigen::VectorXd& u,
+                                     double dt_s) {
+  const TransferFunction tf = monic(tf_in);
+  const int n = tf.order(), m = static_cast<int>(tf.num.size()) - 1;
+  // y_hat = B/A u_d: d/da_i = -p^i/A y_hat, d/db_j = p^j/A u_d, d/dTd = -p B/A u_d.
+  const Eigen::VectorXd y_hat = simulate(tf, u, dt_s);
+  const Eigen::MatrixXd xf = filtered_derivatives(tf.den, y_hat, dt_s, 0.0);
+  const Eigen::MatrixXd uf = filtered_derivatives(tf.den, u, dt_s, tf.delay_s);
+  Eigen::MatrixXd j(u.size(), n + m + 2);
+  j.leftCols(n) = -xf.rightCols(n);
+  j.middleCols(n, m + 1) = uf.rightCols(m + 1);
+  if (m < n) {
+    Eigen::VectorXd b_shift = Eigen::VectorXd::Zero(n + 1);  // p B(p), padded
+    b_shift.segment(n - m - 1, m + 1) = tf.num;
+    j.col(n + m + 1) = -(uf * b_shift);
+  } else {
+    // Biproper: central difference of the simulated output.
+    const double h = 0.1 * dt_s;
+    TransferFunction lo = tf, hi = tf;
+    lo.delay_s = std::max(0.0, tf.delay_s - h);
+    hi.delay_s = tf.delay_s + h;
+    j.col(n + m + 1) = (simulate(hi, u, dt_s) - simulate(lo, u, dt_s)) / (hi.delay_s - lo.delay_s);
+  }
+  return j;
+}
+
+SrivcResult estimate_srivc(const Eigen::VectorXd& u, const Eigen::VectorXd& y, double dt_s,
+                           const SrivcOptions& opt) {
+  const ModelOrder order = opt.order;
+  if (u.size() != y.size() || u.size() < 20 * (order.n + order.m + 2))
+    throw std::invalid_argument("estimate_srivc: u and y must be equally long and >= 20 p samples");
+  if (order.n < 1 || order.m < 0 || order.m >= order.n + 1 || !(dt_s > 0.0))
+    throw std::invalid_argument("estimate_srivc: need n >= 1, 0 <= m <= n and dt_s > 0");
+  const double td0 = opt.delay_s.value_or(0.0);
+  const Eigen::VectorXd a0 = initial_denominator(u, y, dt_s, order, td0, opt);
+  FixedDelayFit best = srivc_fixed(u, y, dt_s, order, td0, a0, opt);
+  if (!opt.delay_s) {
+    // Grid over [0, max_delay], then golden section on the bracket (warm starts).
+    const int grid = std::max(3, std::min(16, static_cast<int>(opt.max_delay_s / dt_s) + 1));
+    const double step = opt.max_delay_s / (grid - 1);
+    int best_i = 0;
+    for (int i = 1; i < grid; ++i) {
+      FixedDelayFit f = srivc_fixed(u, y, dt_s, order, i * step, best.tf.den, opt);
+      if (f.sse < best.sse) best = f, best_i = i;
+    }
+    double a = std::max(0.0, (best_i - 1) * step), b = std::min(opt.max_delay_s, (best_i + 1) * step);
+    const Eigen::VectorXd warm = best.tf.den;
+    auto eval = [&](double td) { return srivc_fixed(u, y, dt_s, order, td, warm, opt); };
+    double x1 = b - kGolden * (b - a), x2 = a + kGolden * (b - a);
+    FixedDelayFit f1 = eval(x1), f2 = eval(x2);
+    while (b - a > dt_s / 50.0) {
+      if (f1.sse <= f2.sse) {
+        b = x2, x2 = x1, f2 = f1, x1 = b - kGolden * (b - a), f1 = eval(x1);
+      } else {
+        a = x1, x1 = x2, f1 = f2, x2 = a + kGolden * (b - a), f2 = eval(x2);
+      }
+    }
+    for (const FixedDelayFit* f : {&f1, &f2})
+      if (f->sse < best.sse) best = *f;
+  }
+  SrivcResult res;
+  res.model = best.tf;
+  res.delay_s = best.tf.delay_s;
+  res.iterations = best.iterations;
+  res.converged = best.converged;
+  const Eigen::Index N = y.size(), p = order.n + order.m + 2;
+  res.noise_variance = best.sse / static_cast<double>(N - p);
+  res.fit_pct = fit_percent(y, simulate(res.model, u, dt_s));
+  // Output-error covariance sigma^2 (J^T J)^-1, J the output sensitivities (incl. Td).
+  const Eigen::MatrixXd jac = output_sensitivities(res.model, u, dt_s);
+  Eigen::MatrixXd info = jac.transpose() * jac;
+  if (opt.delay_s) info.col(p - 1).setZero(), info.row(p - 1).setZero(), info(p - 1, p - 1) = 1;
+  res.covariance = res.noise_variance * info.inverse();
+  if (opt.delay_s) res.covariance(p - 1, p - 1) = 0.0;
+  res.delay_std_s = std::sqrt(std::max(0.0, res.covariance(p - 1, p - 1)));
+  // Covariance on the full theta = [a_n..a_0, b_m..b_0] layout (a_n = 1 fixed).
+  Eigen::MatrixXd cov_full = Eigen::MatrixXd::Zero(p, p);
+  cov_full.bottomRightCorner(p - 1, p - 1) = res.covariance.topLeftCorner(p - 1, p - 1);
+  res.parameters = parameter_table(res.model, cov_full, res.delay_std_s);
+  res.derived = derived_figures(res.model, cov_full);
+  return res;
+}
+
+}  // namespace rig::ident
