@@ -4,14 +4,22 @@ namespace drivers {
 
 const char* to_string(LinkErrorKind kind) {
   switch (kind) {
-    case LinkErrorKind::kTimeout: return "timeout";
-    case LinkErrorKind::kModbusException: return "modbus exception";
-    case LinkErrorKind::kStale: return "stale sample";
-    case LinkErrorKind::kChecksum: return "checksum/counter error";
-    case LinkErrorKind::kLinkLost: return "link lost";
-    case LinkErrorKind::kProtocol: return "protocol error";
-    case LinkErrorKind::kUnavailable: return "unavailable";
-    case LinkErrorKind::kConfig: return "configuration error";
+    case LinkErrorKind::kTimeout:
+      return "timeout";
+    case LinkErrorKind::kModbusException:
+      return "modbus exception";
+    case LinkErrorKind::kStale:
+      return "stale sample";
+    case LinkErrorKind::kChecksum:
+      return "checksum/counter error";
+    case LinkErrorKind::kLinkLost:
+      return "link lost";
+    case LinkErrorKind::kProtocol:
+      return "protocol error";
+    case LinkErrorKind::kUnavailable:
+      return "unavailable";
+    case LinkErrorKind::kConfig:
+      return "configuration error";
   }
   return "unknown link error";
 }

@@ -7,8 +7,8 @@ namespace drivers {
 namespace {
 
 LinkError uri_error(std::string_view uri, std::string_view part, std::string detail) {
-  return LinkError{LinkErrorKind::kConfig,
-                   "URI '" + std::string(uri) + "' " + std::string(part), std::move(detail)};
+  return LinkError{LinkErrorKind::kConfig, "URI '" + std::string(uri) + "' " + std::string(part),
+                   std::move(detail)};
 }
 
 std::optional<int> parse_int(std::string_view text, int lo, int hi) {
@@ -25,15 +25,16 @@ std::optional<int> parse_int(std::string_view text, int lo, int hi) {
 LinkResult<void> parse_host_port(std::string_view uri, std::string_view rest, LinkUri& out) {
   const auto colon = rest.rfind(':');
   if (colon == std::string_view::npos) {
-    return uri_error(uri, "authority", "expected host:port after '//', got '" +
-                                           std::string(rest) + "'");
+    return uri_error(uri, "authority",
+                     "expected host:port after '//', got '" + std::string(rest) + "'");
   }
   out.host = std::string(rest.substr(0, colon));
   if (out.host.empty()) return uri_error(uri, "host", "expected a host name or address");
   const auto port = parse_int(rest.substr(colon + 1), 0, 65535);
   if (!port) {
-    return uri_error(uri, "port", "expected an integer 0..65535, got '" +
-                                      std::string(rest.substr(colon + 1)) + "'");
+    return uri_error(
+        uri, "port",
+        "expected an integer 0..65535, got '" + std::string(rest.substr(colon + 1)) + "'");
   }
   out.port = *port;
   return {};
@@ -64,8 +65,9 @@ LinkResult<void> apply_query_item(std::string_view uri, std::string_view item, L
   }
   return uri_error(uri, part,
                    std::string("unknown key for ") + to_string(out.scheme) +
-                       (rtu ? " (expected unit, baud, parity, data, stop)"
-                            : out.is_modbus() ? " (expected unit)" : " (expected none)"));
+                       (rtu               ? " (expected unit, baud, parity, data, stop)"
+                        : out.is_modbus() ? " (expected unit)"
+                                          : " (expected none)"));
 }
 
 LinkResult<void> parse_query(std::string_view uri, std::string_view query, LinkUri& out) {
@@ -90,10 +92,14 @@ bool LinkUri::is_can() const { return !is_modbus(); }
 
 const char* to_string(LinkScheme scheme) {
   switch (scheme) {
-    case LinkScheme::kModbusTcp: return "modbus+tcp";
-    case LinkScheme::kModbusRtu: return "modbus+rtu";
-    case LinkScheme::kCanSocketcan: return "can+socketcan";
-    case LinkScheme::kCanUdp: return "can+udp";
+    case LinkScheme::kModbusTcp:
+      return "modbus+tcp";
+    case LinkScheme::kModbusRtu:
+      return "modbus+rtu";
+    case LinkScheme::kCanSocketcan:
+      return "can+socketcan";
+    case LinkScheme::kCanUdp:
+      return "can+udp";
   }
   return "?";
 }
@@ -102,8 +108,9 @@ LinkResult<LinkUri> parse_link_uri(std::string_view uri_in, std::string_view def
   std::string text(uri_in);
   const auto colon = text.find(':');
   if (colon == std::string::npos) {
-    return uri_error(text, "scheme", "expected '<scheme>:' (modbus+tcp, modbus+rtu, "
-                                     "can+socketcan, can+udp)");
+    return uri_error(text, "scheme",
+                     "expected '<scheme>:' (modbus+tcp, modbus+rtu, "
+                     "can+socketcan, can+udp)");
   }
   if (text.substr(0, colon).find('+') == std::string::npos && !default_family.empty()) {
     text = std::string(default_family) + "+" + text;
@@ -129,13 +136,16 @@ LinkResult<LinkUri> parse_link_uri(std::string_view uri_in, std::string_view def
     if (slashes) rest.remove_prefix(2);  // tolerate modbus+rtu:///dev/ttyUSB0
     out.device = std::string(rest);
     if (out.device.empty()) {
-      return uri_error(uri, "device", out.scheme == LinkScheme::kModbusRtu
-                                          ? "expected a serial device, e.g. /dev/ttyUSB0"
-                                          : "expected a CAN interface name, e.g. can0");
+      return uri_error(uri, "device",
+                       out.scheme == LinkScheme::kModbusRtu
+                           ? "expected a serial device, e.g. /dev/ttyUSB0"
+                           : "expected a CAN interface name, e.g. can0");
     }
   } else {
-    return uri_error(uri, "scheme", "expected modbus+tcp, modbus+rtu, can+socketcan or "
-                                    "can+udp, got '" + std::string(scheme) + "'");
+    return uri_error(uri, "scheme",
+                     "expected modbus+tcp, modbus+rtu, can+socketcan or "
+                     "can+udp, got '" +
+                         std::string(scheme) + "'");
   }
   if (auto r = parse_query(uri, query, out); !r) return r.error();
   return out;

@@ -18,15 +18,15 @@ enum class LinkScheme { kModbusTcp, kModbusRtu, kCanSocketcan, kCanUdp };
 
 struct LinkUri {
   LinkScheme scheme = LinkScheme::kModbusTcp;
-  std::string text;      // the URI as given (after adding a default family)
-  std::string host;      // tcp/udp
-  int port = 0;          // tcp/udp; 0 lets a listening side pick an ephemeral port
-  std::string device;    // rtu: serial device path; socketcan: interface name
-  int unit = 1;          // Modbus unit (slave) id, 0..247
-  int baud = 19200;      // rtu
-  char parity = 'N';     // rtu: N, E or O
-  int data_bits = 8;     // rtu: 5..8
-  int stop_bits = 1;     // rtu: 1 or 2
+  std::string text;    // the URI as given (after adding a default family)
+  std::string host;    // tcp/udp
+  int port = 0;        // tcp/udp; 0 lets a listening side pick an ephemeral port
+  std::string device;  // rtu: serial device path; socketcan: interface name
+  int unit = 1;        // Modbus unit (slave) id, 0..247
+  int baud = 19200;    // rtu
+  char parity = 'N';   // rtu: N, E or O
+  int data_bits = 8;   // rtu: 5..8
+  int stop_bits = 1;   // rtu: 1 or 2
 
   bool is_modbus() const;
   bool is_can() const;

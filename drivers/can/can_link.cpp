@@ -11,6 +11,7 @@ namespace {
 
 namespace j = j1939;
 using Clock = std::chrono::steady_clock;
+constexpr int kMaxFramesPerRead = 4096;
 
 class CanLink final : public LinkBase {
  public:
@@ -66,7 +67,9 @@ LinkResult<void> CanLink::send_command(double bias_pct, bool enable, const char*
   return {};
 }
 
-LinkResult<void> CanLink::write(double bias_pct) { return send_command(bias_pct, enabled_, "write"); }
+LinkResult<void> CanLink::write(double bias_pct) {
+  return send_command(bias_pct, enabled_, "write");
+}
 
 LinkResult<void> CanLink::advance(std::uint16_t ticks) {
   if (ticks == 0) return {};
@@ -122,28 +125,29 @@ LinkResult<Sample> CanLink::read() {
   }
   bool fresh = false;
   bool saw_old = false;
-  for (;;) {
+  // Bounded so that a flooding sender cannot hold read() past its deadline.
+  for (int frames = 0; frames < kMaxFramesPerRead; ++frames) {
     // Once the awaited tick is in, only drain what is already queued.
     const auto left = fresh ? std::chrono::milliseconds(0)
-                            : std::chrono::duration_cast<std::chrono::milliseconds>(
-                                  deadline - Clock::now());
+                            : std::chrono::ceil<std::chrono::milliseconds>(deadline - Clock::now());
     auto f = endpoint_->receive(std::max(left, std::chrono::milliseconds(0)));
     if (!f) {
       if (f.error().kind != LinkErrorKind::kTimeout) return f.error();
       break;
     }
     if (auto r = apply(*f, fresh, saw_old); !r) return r.error();
+    if (!fresh && Clock::now() >= deadline) break;
   }
   if (!fresh) {
     if (saw_old || (target_ && sample_.counter != *counter_.last())) {
       return LinkError{LinkErrorKind::kStale, where,
                        "no new plant tick within " +
-                           std::to_string(options_.response_timeout.count()) +
-                           " ms (counter " + std::to_string(sample_.counter) + ")"};
+                           std::to_string(options_.response_timeout.count()) + " ms (counter " +
+                           std::to_string(sample_.counter) + ")"};
     }
-    return LinkError{LinkErrorKind::kTimeout, where,
-                     "no frame within " + std::to_string(options_.response_timeout.count()) +
-                         " ms"};
+    return LinkError{
+        LinkErrorKind::kTimeout, where,
+        "no frame within " + std::to_string(options_.response_timeout.count()) + " ms"};
   }
   return finish(Clock::now());
 }

@@ -40,14 +40,13 @@ LinkResult<void> write_frame(int fd, const can_frame& frame, std::string_view wh
   }
 }
 
-LinkResult<can_frame> read_frame(int fd, std::chrono::milliseconds timeout,
-                                 std::string_view where, sockaddr_storage* from,
-                                 socklen_t* from_len) {
+LinkResult<can_frame> read_frame(int fd, std::chrono::milliseconds timeout, std::string_view where,
+                                 sockaddr_storage* from, socklen_t* from_len) {
   using Clock = std::chrono::steady_clock;
   const auto deadline = Clock::now() + timeout;
   for (;;) {
-    const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(
-        deadline - Clock::now());
+    // Round up so that a short timeout still waits rather than polling once.
+    const auto left = std::chrono::ceil<std::chrono::milliseconds>(deadline - Clock::now());
     pollfd p{fd, POLLIN, 0};
     const int ready = ::poll(&p, 1, left.count() > 0 ? static_cast<int>(left.count()) : 0);
     if (ready < 0) {

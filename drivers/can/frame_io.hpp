@@ -21,9 +21,8 @@ LinkResult<void> write_frame(int fd, const can_frame& frame, std::string_view wh
 // Waits up to `timeout` for one frame. kTimeout when none arrives, kLinkLost when the peer
 // closed or the socket failed, kProtocol when the datagram is not a struct can_frame.
 // `from`/`from_len` receive the sender's address when given.
-LinkResult<can_frame> read_frame(int fd, std::chrono::milliseconds timeout,
-                                 std::string_view where, sockaddr_storage* from = nullptr,
-                                 socklen_t* from_len = nullptr);
+LinkResult<can_frame> read_frame(int fd, std::chrono::milliseconds timeout, std::string_view where,
+                                 sockaddr_storage* from = nullptr, socklen_t* from_len = nullptr);
 
 // errno of a failed socket call -> LinkError (kLinkLost, kTimeout or kUnavailable).
 LinkError os_error(int err, std::string_view where, std::string_view call);

@@ -67,14 +67,14 @@ LinkResult<void> check_frame(const can_frame& f, std::uint32_t pgn) {
   return {};
 }
 
-LinkResult<void> check_sum_and_counter(const can_frame& f, std::uint32_t pgn,
-                                       std::uint8_t counter, std::uint8_t checksum,
+LinkResult<void> check_sum_and_counter(const can_frame& f, std::uint32_t pgn, std::uint8_t counter,
+                                       std::uint8_t checksum,
                                        std::optional<std::uint8_t> previous) {
   const std::uint8_t expected = checksum4(f.data, counter, f.can_id & CAN_EFF_MASK);
   if (checksum != expected) {
-    return codec_error(LinkErrorKind::kChecksum, pgn,
-                       "checksum " + std::to_string(checksum) + ", expected " +
-                           std::to_string(expected));
+    return codec_error(
+        LinkErrorKind::kChecksum, pgn,
+        "checksum " + std::to_string(checksum) + ", expected " + std::to_string(expected));
   }
   if (previous && counter != ((*previous + 1) & 0x0F)) {
     return codec_error(LinkErrorKind::kChecksum, pgn,
@@ -88,8 +88,8 @@ LinkResult<void> check_sum_and_counter(const can_frame& f, std::uint32_t pgn,
 // Byte 7 layout of the proprietary frames: counter in the high nibble, checksum in the low.
 void seal_high_counter(can_frame& f, std::uint8_t counter) {
   counter &= 0x0F;
-  f.data[7] = static_cast<std::uint8_t>(
-      (counter << 4) | checksum4(f.data, counter, f.can_id & CAN_EFF_MASK));
+  f.data[7] = static_cast<std::uint8_t>((counter << 4) |
+                                        checksum4(f.data, counter, f.can_id & CAN_EFF_MASK));
 }
 
 }  // namespace
@@ -131,9 +131,7 @@ std::uint32_t pgn_of(const can_frame& f) {
   return decode_id(f.can_id & CAN_EFF_MASK).pgn;
 }
 
-std::uint8_t source_of(const can_frame& f) {
-  return static_cast<std::uint8_t>(f.can_id & 0xFF);
-}
+std::uint8_t source_of(const can_frame& f) { return static_cast<std::uint8_t>(f.can_id & 0xFF); }
 
 // ---- TSC1 ----------------------------------------------------------------------------------
 
@@ -145,22 +143,21 @@ can_frame encode_tsc1(const Tsc1& m, std::uint8_t source, std::uint8_t destinati
   put_u16(&f.data[1],
           static_cast<std::uint16_t>(scale_clamped(m.speed_rpm, kSpeedRpmPerBit, 0.0, kRawMax16)));
   const std::uint8_t counter = m.counter & 0x0F;
-  f.data[7] = static_cast<std::uint8_t>(
-      (checksum4(f.data, counter, f.can_id & CAN_EFF_MASK) << 4) | counter);
+  f.data[7] = static_cast<std::uint8_t>((checksum4(f.data, counter, f.can_id & CAN_EFF_MASK) << 4) |
+                                        counter);
   return f;
 }
 
 LinkResult<Tsc1> decode_tsc1(const can_frame& f, std::optional<std::uint8_t> previous_counter) {
   if (auto r = check_frame(f, kPgnTsc1); !r) return r.error();
   const std::uint8_t counter = f.data[7] & 0x0F;
-  if (auto r = check_sum_and_counter(f, kPgnTsc1, counter, f.data[7] >> 4, previous_counter);
-      !r) {
+  if (auto r = check_sum_and_counter(f, kPgnTsc1, counter, f.data[7] >> 4, previous_counter); !r) {
     return r.error();
   }
   if ((f.data[0] & 0x03) != 0x01) {
-    return codec_error(LinkErrorKind::kProtocol, kPgnTsc1,
-                       "override mode " + std::to_string(f.data[0] & 0x03) +
-                           ", expected 1 (speed control)");
+    return codec_error(
+        LinkErrorKind::kProtocol, kPgnTsc1,
+        "override mode " + std::to_string(f.data[0] & 0x03) + ", expected 1 (speed control)");
   }
   return Tsc1{get_u16(&f.data[1]) * kSpeedRpmPerBit, counter};
 }
@@ -218,8 +215,8 @@ LinkResult<RigCommand> decode_rig_command(const can_frame& f,
                                           std::optional<std::uint8_t> previous_counter) {
   if (auto r = check_frame(f, kPgnRigCommand); !r) return r.error();
   const std::uint8_t counter = f.data[7] >> 4;
-  if (auto r = check_sum_and_counter(f, kPgnRigCommand, counter, f.data[7] & 0x0F,
-                                     previous_counter);
+  if (auto r =
+          check_sum_and_counter(f, kPgnRigCommand, counter, f.data[7] & 0x0F, previous_counter);
       !r) {
     return r.error();
   }

@@ -92,9 +92,9 @@ class SocketcanEndpoint final : public CanEndpoint {
 };
 
 LinkError unavailable(const std::string& where, const char* call, int err) {
-  return LinkError{LinkErrorKind::kUnavailable, where,
-                   std::string("CAN unavailable on this host (") + call + ": " +
-                       std::strerror(err) + ")"};
+  return LinkError{
+      LinkErrorKind::kUnavailable, where,
+      std::string("CAN unavailable on this host (") + call + ": " + std::strerror(err) + ")"};
 }
 
 LinkResult<sockaddr_in> resolve_ipv4(const LinkUri& uri, const std::string& where) {
@@ -127,8 +127,7 @@ LinkResult<std::unique_ptr<CanEndpoint>> open_udp(const LinkUri& uri, CanRole ro
   } else {
     // Ephemeral local port; connect() so that only the node's datagrams are accepted and an
     // absent node shows up as ECONNREFUSED (link lost) instead of silence.
-    if (::connect(fd.get(), reinterpret_cast<const sockaddr*>(&node_addr), sizeof node_addr) !=
-        0) {
+    if (::connect(fd.get(), reinterpret_cast<const sockaddr*>(&node_addr), sizeof node_addr) != 0) {
       return os_error(errno, where, "connect");
     }
   }
@@ -177,11 +176,12 @@ LinkResult<std::unique_ptr<CanEndpoint>> open_socketcan(const std::string& inter
 
 LinkResult<std::unique_ptr<CanEndpoint>> open_can_endpoint(const LinkUri& uri, CanRole role) {
   switch (uri.scheme) {
-    case LinkScheme::kCanUdp: return open_udp(uri, role);
-    case LinkScheme::kCanSocketcan: return open_socketcan(uri.device);
+    case LinkScheme::kCanUdp:
+      return open_udp(uri, role);
+    case LinkScheme::kCanSocketcan:
+      return open_socketcan(uri.device);
     default:
-      return LinkError{LinkErrorKind::kConfig, uri.text,
-                       "expected a can+udp or can+socketcan URI"};
+      return LinkError{LinkErrorKind::kConfig, uri.text, "expected a can+udp or can+socketcan URI"};
   }
 }
 

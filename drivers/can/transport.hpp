@@ -29,9 +29,9 @@ class CanEndpoint {
   virtual LinkResult<void> send(const can_frame& frame) = 0;
   // Waits up to `timeout` (0: poll once) for the next frame.
   virtual LinkResult<can_frame> receive(std::chrono::milliseconds timeout) = 0;
-  virtual bool has_peer() const = 0;   // always true except a UDP node not yet contacted
-  virtual int local_port() const = 0;  // bound UDP port (0 for SocketCAN)
-  virtual int fd() const = 0;          // for poll() in a server loop
+  virtual bool has_peer() const = 0;         // always true except a UDP node not yet contacted
+  virtual int local_port() const = 0;        // bound UDP port (0 for SocketCAN)
+  virtual int fd() const = 0;                // for poll() in a server loop
   virtual std::string describe() const = 0;  // e.g. "can+udp://127.0.0.1:29536"
 };
 

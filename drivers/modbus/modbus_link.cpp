@@ -75,12 +75,12 @@ LinkResult<void> ModbusLink::configure() {
   counter_.reset();
   modbus_t* raw = uri_.scheme == LinkScheme::kModbusTcp
                       ? modbus_new_tcp(uri_.host.c_str(), uri_.port)
-                      : modbus_new_rtu(uri_.device.c_str(), uri_.baud, uri_.parity,
-                                       uri_.data_bits, uri_.stop_bits);
+                      : modbus_new_rtu(uri_.device.c_str(), uri_.baud, uri_.parity, uri_.data_bits,
+                                       uri_.stop_bits);
   if (!raw) return LinkError{LinkErrorKind::kConfig, uri_.text, modbus_strerror(errno)};
   std::unique_ptr<modbus_t, ContextFree> ctx(raw);
-  const auto us = std::chrono::duration_cast<std::chrono::microseconds>(
-                      options_.response_timeout).count();
+  const auto us =
+      std::chrono::duration_cast<std::chrono::microseconds>(options_.response_timeout).count();
   if (modbus_set_slave(raw, uri_.unit) != 0 ||
       modbus_set_response_timeout(raw, static_cast<std::uint32_t>(us / 1000000),
                                   static_cast<std::uint32_t>(us % 1000000)) != 0) {
@@ -92,9 +92,9 @@ LinkResult<void> ModbusLink::configure() {
 }
 
 LinkResult<void> ModbusLink::write_holding(int first, int count, const std::uint16_t* values) {
-  const std::string where = count == 1 ? "holding " + std::to_string(first)
-                                       : "holding " + std::to_string(first) + "-" +
-                                             std::to_string(first + count - 1);
+  const std::string where =
+      count == 1 ? "holding " + std::to_string(first)
+                 : "holding " + std::to_string(first) + "-" + std::to_string(first + count - 1);
   if (!ctx_) return not_configured(where + " write");
   const int n = count == 1 ? modbus_write_register(ctx_.get(), first, values[0])
                            : modbus_write_registers(ctx_.get(), first, count, values);
@@ -143,9 +143,9 @@ LinkResult<Sample> ModbusLink::read() {
     return modbus_error(err, where);
   }
   if (n != map::kInputCount) {
-    return LinkError{LinkErrorKind::kProtocol, where,
-                     "got " + std::to_string(n) + " registers, expected " +
-                         std::to_string(map::kInputCount)};
+    return LinkError{
+        LinkErrorKind::kProtocol, where,
+        "got " + std::to_string(n) + " registers, expected " + std::to_string(map::kInputCount)};
   }
   auto word32 = [&](int hi) {
     return (std::uint32_t{in[hi]} << 16) | std::uint32_t{in[hi + 1]};  // high word first

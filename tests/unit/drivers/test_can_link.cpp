@@ -45,12 +45,14 @@ class TestNode {
   std::atomic<bool> freeze_counter{false};
   std::atomic<bool> corrupt{false};
   std::atomic<bool> silent{false};
+  std::atomic<bool> free_run{false};  // realtime: one tick per millisecond once contacted
 
  private:
   void run() {
     std::optional<std::uint8_t> previous;
     while (!stop_) {
-      auto f = ep_->receive(10ms);
+      auto f = ep_->receive(free_run ? 1ms : 10ms);
+      if (free_run && ep_->has_peer()) tick();
       if (!f) continue;
       if (j::pgn_of(*f) == j::kPgnRigCommand) {
         auto c = j::decode_rig_command(*f, previous);  // checks the heartbeat counter
@@ -87,9 +89,9 @@ class TestNode {
   std::uint16_t counter_ = 100;
 };
 
-std::unique_ptr<drivers::GovernorLink> connect(const TestNode& node) {
+std::unique_ptr<drivers::GovernorLink> connect(const TestNode& node, bool lockstep = true) {
   LinkOptions o;
-  o.lockstep = true;
+  o.lockstep = lockstep;
   o.response_timeout = 200ms;
   o.ramp_rate_pct_per_s = 25.0;
   o.plant_tick = 1ms;
@@ -127,6 +129,30 @@ TEST(CanLink, LockstepCycleOverUdp) {
   EXPECT_DOUBLE_EQ(c[1].bias_pct, 0.5);
   EXPECT_DOUBLE_EQ(c[2].bias_pct, -1.25);
   EXPECT_EQ(node.command_errors(), 0);  // heartbeat counter +1 per frame, checksums good
+}
+
+TEST(CanLink, RealtimeReadsReturnNewTicks) {
+  TestNode node;
+  node.free_run = true;
+  auto link = connect(node, /*lockstep=*/false);
+  ASSERT_TRUE(link->activate());  // the node learns its peer and starts ticking
+  std::optional<std::uint16_t> last;
+  for (int i = 0; i < 10; ++i) {
+    ASSERT_TRUE(link->write(0.1 * i));
+    auto s = link->read();
+    ASSERT_TRUE(s) << s.error().message();
+    if (last) {
+      EXPECT_NE(s->counter, *last);  // every read is a tick not seen before
+    }
+    last = s->counter;
+    std::this_thread::sleep_for(3ms);
+  }
+  node.freeze_counter = true;
+  std::this_thread::sleep_for(5ms);
+  (void)link->read();  // may still return the last tick before the freeze
+  auto s = link->read();
+  ASSERT_FALSE(s) << "counter still moving: " << s->counter;
+  EXPECT_EQ(s.error().kind, LinkErrorKind::kStale) << s.error().message();
 }
 
 TEST(CanLink, DeactivateRampsAndClearsEnable) {

@@ -1,10 +1,9 @@
-#include "drivers/can/j1939.hpp"
-
 #include <gtest/gtest.h>
 
 #include <cstdint>
 
 #include "drivers/bias.hpp"
+#include "drivers/can/j1939.hpp"
 
 namespace j = drivers::j1939;
 using drivers::LinkErrorKind;

@@ -1,6 +1,6 @@
-#include "drivers/link_uri.hpp"
-
 #include <gtest/gtest.h>
+
+#include "drivers/link_uri.hpp"
 
 using drivers::LinkErrorKind;
 using drivers::LinkScheme;

@@ -68,8 +68,7 @@ TEST(ModbusRtu, LockstepCycleOverPtyPair) {
   PtyPair pty;
   if (!pty.ok()) GTEST_SKIP() << "socat could not make a pty pair; RTU test skipped";
   drivers::testing::ModbusTestServer server(pty.plant(), 38400);
-  auto link = drivers::open_link("modbus+rtu:" + pty.rig() + "?baud=38400&unit=1",
-                                 rtu_options());
+  auto link = drivers::open_link("modbus+rtu:" + pty.rig() + "?baud=38400&unit=1", rtu_options());
   ASSERT_TRUE(link) << link.error().message();
   auto& l = *link.value();
   ASSERT_TRUE(l.configure());
