@@ -46,7 +46,7 @@ struct CorrelatorOptions {
 Eigen::Index resolved_zero_index(const CorrelatorOptions& options);
 
 // Throws std::invalid_argument with a one-line message when options are unusable for a
-// record of `samples` samples (lags < 1, zero_index outside the window, skip < 1,
+// record of `samples` samples (samples < 0: length not known yet, as when streaming) (lags < 1, zero_index outside the window, skip < 1,
 // dt_s <= 0, lags > samples, arcsine_correction without kPolarity).
 void validate(const CorrelatorOptions& options, Eigen::Index samples);
 

@@ -50,18 +50,18 @@ void check_common(Eigen::Index n, double dt_s) {
 Eigen::VectorXd gaussian_excitation(const GaussianOptions& o) {
   check_common(o.n, o.dt_s);
   if (o.n < 2) fail("gaussian needs n >= 2 samples to set a standard deviation");
-  if (!(o.bandwidth_hz > 0.0) || !(o.bandwidth_hz < 0.5 / o.dt_s)) {
-    fail("bandwidth_hz must be in (0, " + std::to_string(0.5 / o.dt_s) + ") Hz, got " +
-         std::to_string(o.bandwidth_hz));
+  const double fc = o.bandwidth_hz > 0.0 ? o.bandwidth_hz : 2.0 * o.resonance_hz;
+  if (!(fc > 0.0) || !(fc < 0.5 / o.dt_s)) {
+    fail("bandwidth (bandwidth_hz, or 2 * resonance_hz) must be in (0, " +
+         std::to_string(0.5 / o.dt_s) + ") Hz, got " + std::to_string(fc));
   }
   if (!(o.sigma > 0.0)) fail("sigma must be > 0, got " + std::to_string(o.sigma));
   if (o.clip_sigma != 0.0 && !(o.clip_sigma > 1.0)) {
     fail("clip_sigma must be 0 (off) or > 1, got " + std::to_string(o.clip_sigma));
   }
-  ButterworthLowPass filter(o.filter_order, o.bandwidth_hz, o.dt_s);
+  ButterworthLowPass filter(o.filter_order, fc, o.dt_s);
   const Eigen::Index warmup =
-      o.warmup >= 0 ? o.warmup
-                    : static_cast<Eigen::Index>(std::ceil(20.0 / (o.bandwidth_hz * o.dt_s)));
+      o.warmup >= 0 ? o.warmup : static_cast<Eigen::Index>(std::ceil(20.0 / (fc * o.dt_s)));
   Xoshiro256 rng(o.seed);
   for (Eigen::Index i = 0; i < warmup; ++i) filter.step(rng.normal());
   Eigen::VectorXd x(o.n);

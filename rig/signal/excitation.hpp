@@ -19,17 +19,18 @@ namespace rig::signal {
 // slightly (Butterworth); it is NOT a delta, so correlate long enough (>> 1/fc) records.
 // Clipping (clip_sigma > 0): values are limited to +-clip_sigma*sigma and the pre-clip
 // scale is solved (bisection) so that the clipped record still has standard deviation sigma.
-// The default bandwidth is twice the ~2 Hz diesel/alternator resonance (thesis: "bandwidth
-// about twice the resonant frequency").
+// Bandwidth: bandwidth_hz, or when it is 0, twice resonance_hz (thesis: "bandwidth about
+// twice the resonant frequency"); the defaults give 4 Hz for the ~2 Hz diesel/alternator mode.
 struct GaussianOptions {
   Eigen::Index n = 4096;       // samples
   double dt_s = 0.01;          // sample period
-  double bandwidth_hz = 4.0;   // low-pass corner; must be < 0.5/dt_s
+  double bandwidth_hz = 0.0;   // low-pass corner (< 0.5/dt_s); 0: 2 * resonance_hz
   double sigma = 1.0;          // output standard deviation (output units)
   double clip_sigma = 0.0;     // clip at +-clip_sigma*sigma; 0 = no clipping (else >= 1)
   std::uint64_t seed = 1;
   int filter_order = 4;        // Butterworth order, 1..8
   Eigen::Index warmup = -1;    // filter settling samples discarded; -1: 20 / (fc dt_s)
+  double resonance_hz = 2.0;   // expected resonance, used when bandwidth_hz is 0
 };
 Eigen::VectorXd gaussian_excitation(const GaussianOptions& options);
 

@@ -13,6 +13,8 @@
 //                 and R <- R + (R_new - R) / W (the first block initialises R = R_new).
 //                 W = 10 and W = 50 were used in the thesis.
 // A block ends every `block_samples` received samples (0: at the end of every push()).
+// Polarity with arcsine_correction averages the raw polarity correlation and applies
+// rho = sin(pi/2 r) to the average when ruu()/ryu() are read.
 // Before the first exponential block completes, ruu()/ryu() return the running mean of
 // the current block, so the live view has something to draw.
 //

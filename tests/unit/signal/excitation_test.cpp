@@ -83,6 +83,29 @@ TEST(GaussianExcitation, ClippingKeepsSigmaAndBoundsPeaks) {
   EXPECT_THROW(gaussian_excitation({.dt_s = 0.01, .bandwidth_hz = 60.0}), std::invalid_argument);
 }
 
+TEST(GaussianExcitation, DefaultBandwidthIsTwiceTheResonance) {
+  const Eigen::VectorXd by_resonance = gaussian_excitation({.n = 3000, .resonance_hz = 3.0});
+  const Eigen::VectorXd explicit_band = gaussian_excitation({.n = 3000, .bandwidth_hz = 6.0});
+  EXPECT_EQ((by_resonance - explicit_band).cwiseAbs().maxCoeff(), 0.0);
+  EXPECT_GT((gaussian_excitation({.n = 3000, .bandwidth_hz = 5.0}) - explicit_band).norm(), 1.0);
+}
+
+// Unit DC gain, -3 dB at the corner and order-n roll-off (|H(10 fc)| ~ 10^-n) for odd and even n.
+// fc T = 0.001 is a badly conditioned case on purpose: each section's 1 + a1 + a2 ~ (wc T)^2
+// ~ 4e-5, so rounding of 1e-16 in the coefficients moves the DC gain by ~1e-11 per section.
+TEST(Butterworth, CornerDcGainAndRollOff) {
+  for (int order : {1, 2, 3, 4, 5}) {
+    ButterworthLowPass f(order, 1.0, 0.001);
+    EXPECT_NEAR(std::abs(f.response(0.0)), 1.0, 1e-10) << order;
+    EXPECT_NEAR(std::abs(f.response(1.0)), std::sqrt(0.5), 1e-12) << order;
+    EXPECT_NEAR(std::log10(std::abs(f.response(10.0))), -order, 0.05) << order;
+    const Eigen::VectorXd step = f.process(Eigen::VectorXd::Ones(20000));
+    EXPECT_NEAR(step.tail(1)[0], 1.0, 1e-9) << order;
+  }
+  EXPECT_THROW(ButterworthLowPass(9, 1.0, 0.001), std::invalid_argument);
+  EXPECT_THROW(ButterworthLowPass(2, 600.0, 0.001), std::invalid_argument);
+}
+
 // Primitive over GF(2): x^(2^n-1) = 1 mod p(x) and x^((2^n-1)/q) != 1 for every prime q | 2^n-1.
 std::uint64_t mulmod(std::uint64_t a, std::uint64_t b, std::uint64_t poly, int n) {
   std::uint64_t r = 0;
