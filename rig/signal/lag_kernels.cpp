@@ -50,14 +50,16 @@ RIG_HOT_LOOP void direct_run2(const double* a1, const double* a2, const double* 
                               double* __restrict acc2) {
   const Eigen::Index s = run.stride, lags = run.lags;
   Eigen::Index i = 0;
-  for (; i + 2 <= run.count; i += 2) {
-    const double p0 = a1[i * s], p1 = a1[(i + 1) * s];
-    const double q0 = a2[i * s], q1 = a2[(i + 1) * s];
+  for (; i + 4 <= run.count; i += 4) {
+    const double p0 = a1[i * s], p1 = a1[(i + 1) * s], p2 = a1[(i + 2) * s], p3 = a1[(i + 3) * s];
+    const double q0 = a2[i * s], q1 = a2[(i + 1) * s], q2 = a2[(i + 2) * s], q3 = a2[(i + 3) * s];
     const double* __restrict w0 = w + i * s;
     const double* __restrict w1 = w0 + s;
+    const double* __restrict w2 = w1 + s;
+    const double* __restrict w3 = w2 + s;
     for (Eigen::Index j = 0; j < lags; ++j) {
-      acc1[j] += p0 * w0[j] + p1 * w1[j];
-      acc2[j] += q0 * w0[j] + q1 * w1[j];
+      acc1[j] += (p0 * w0[j] + p1 * w1[j]) + (p2 * w2[j] + p3 * w3[j]);
+      acc2[j] += (q0 * w0[j] + q1 * w1[j]) + (q2 * w2[j] + q3 * w3[j]);
     }
   }
   for (; i < run.count; ++i) {
@@ -98,22 +100,24 @@ RIG_HOT_LOOP void relay_run2(const double* a1, const double* a2, const std::uint
                              AnchorRun run, double* __restrict acc1,
                              double* __restrict acc2) {
   const Eigen::Index s = run.stride, lags = run.lags;
+  auto bits = [](const double* a, Eigen::Index i) { return std::bit_cast<std::uint64_t>(a[i]); };
   Eigen::Index i = 0;
-  for (; i + 2 <= run.count; i += 2) {
-    const auto p0 = std::bit_cast<std::uint64_t>(a1[i * s]);
-    const auto p1 = std::bit_cast<std::uint64_t>(a1[(i + 1) * s]);
-    const auto q0 = std::bit_cast<std::uint64_t>(a2[i * s]);
-    const auto q1 = std::bit_cast<std::uint64_t>(a2[(i + 1) * s]);
+  for (; i + 4 <= run.count; i += 4) {
+    const std::uint64_t p0 = bits(a1, i * s), p1 = bits(a1, (i + 1) * s);
+    const std::uint64_t p2 = bits(a1, (i + 2) * s), p3 = bits(a1, (i + 3) * s);
+    const std::uint64_t q0 = bits(a2, i * s), q1 = bits(a2, (i + 1) * s);
+    const std::uint64_t q2 = bits(a2, (i + 2) * s), q3 = bits(a2, (i + 3) * s);
     const std::uint64_t* __restrict m0 = w_mask + i * s;
     const std::uint64_t* __restrict m1 = m0 + s;
+    const std::uint64_t* __restrict m2 = m1 + s;
+    const std::uint64_t* __restrict m3 = m2 + s;
     for (Eigen::Index j = 0; j < lags; ++j) {
-      acc1[j] += flip(p0, m0[j]) + flip(p1, m1[j]);
-      acc2[j] += flip(q0, m0[j]) + flip(q1, m1[j]);
+      acc1[j] += (flip(p0, m0[j]) + flip(p1, m1[j])) + (flip(p2, m2[j]) + flip(p3, m3[j]));
+      acc2[j] += (flip(q0, m0[j]) + flip(q1, m1[j])) + (flip(q2, m2[j]) + flip(q3, m3[j]));
     }
   }
   for (; i < run.count; ++i) {
-    const auto p = std::bit_cast<std::uint64_t>(a1[i * s]);
-    const auto q = std::bit_cast<std::uint64_t>(a2[i * s]);
+    const std::uint64_t p = bits(a1, i * s), q = bits(a2, i * s);
     const std::uint64_t* __restrict mi = w_mask + i * s;
     for (Eigen::Index j = 0; j < lags; ++j) {
       acc1[j] += flip(p, mi[j]);

@@ -12,6 +12,7 @@ namespace rig::signal {
 namespace {
 
 constexpr Eigen::Index kCompactSamples = 4096;  // dead prefix tolerated before a memmove
+constexpr Eigen::Index kAnchorBatch = 8;        // anchors deferred by per-sample pushes
 
 }  // namespace
 
@@ -50,10 +51,11 @@ void StreamingCorrelator::reset() {
   y_neg_.clear();
   buf_start_ = received_ = 0;
   next_anchor_ = positive_;  // first anchor whose whole window is inside the record
-  sum_uu_.assign(static_cast<size_t>(lags_), 0.0);
-  sum_yu_.assign(static_cast<size_t>(lags_), 0.0);
-  neg_uu_.assign(static_cast<size_t>(lags_), 0);
-  neg_yu_.assign(static_cast<size_t>(lags_), 0);
+  const auto l = static_cast<size_t>(lags_);
+  sums_.uu.assign(l, 0.0);
+  sums_.yu.assign(l, 0.0);
+  sums_.neg_uu.assign(l, 0);
+  sums_.neg_yu.assign(l, 0);
   block_products_ = block_received_ = products_ = blocks_ = 0;
   avg_uu_.setZero(lags_);
   avg_yu_.setZero(lags_);
@@ -74,8 +76,9 @@ void StreamingCorrelator::append(double u, double y) {
 
 void StreamingCorrelator::push(double u, double y) {
   append(u, y);
-  process_ready();
-  if (options_.block_samples > 0 && block_received_ >= options_.block_samples) finish_block();
+  const bool block_end = options_.block_samples > 0 && block_received_ >= options_.block_samples;
+  if (block_end || ready_anchors() >= kAnchorBatch) process_ready();
+  if (block_end) finish_block();
   compact();
 }
 
@@ -101,32 +104,41 @@ void StreamingCorrelator::push(const Eigen::VectorXd& u_block, const Eigen::Vect
   if (options_.block_samples == 0 && u_block.size() > 0) finish_block();
 }
 
-// Forms the products of every anchor t whose window [t - P, t + z] has fully arrived.
-void StreamingCorrelator::process_ready() {
+// Anchors t >= next_anchor (every skip-th) whose window [t - P, t + z] has fully arrived.
+Eigen::Index StreamingCorrelator::ready_anchors() const {
   const Eigen::Index last = received_ - 1;
-  if (next_anchor_ + zero_ > last) return;
-  const Eigen::Index s = options_.correlator.skip;
-  const Eigen::Index count = (last - zero_ - next_anchor_) / s + 1;
-  const detail::AnchorRun run{count, s, lags_};
+  if (next_anchor_ + zero_ > last) return 0;
+  return (last - zero_ - next_anchor_) / options_.correlator.skip + 1;
+}
+
+// Adds the products of `count` anchors from next_anchor into `sums`.
+void StreamingCorrelator::accumulate(Eigen::Index count, Sums& sums) const {
+  if (count <= 0) return;
+  const detail::AnchorRun run{count, options_.correlator.skip, lags_};
   const auto a = static_cast<size_t>(next_anchor_ - buf_start_);
   const auto w = static_cast<size_t>(next_anchor_ - positive_ - buf_start_);
   switch (options_.correlator.kind) {
     case CorrelatorKind::kDirect:
-      detail::direct_run2(&u_[a], &y_[a], &u_[w], run, sum_uu_.data(), sum_yu_.data());
+      detail::direct_run2(&u_[a], &y_[a], &u_[w], run, sums.uu.data(), sums.yu.data());
       break;
     case CorrelatorKind::kFft:
-      detail::fft_run(&u_[a], &u_[w], run, sum_uu_.data());
-      detail::fft_run(&y_[a], &u_[w], run, sum_yu_.data());
+      detail::fft_run(&u_[a], &u_[w], run, sums.uu.data());
+      detail::fft_run(&y_[a], &u_[w], run, sums.yu.data());
       break;
     case CorrelatorKind::kRelay:
-      detail::relay_run2(&u_[a], &y_[a], &u_mask_[w], run, sum_uu_.data(), sum_yu_.data());
+      detail::relay_run2(&u_[a], &y_[a], &u_mask_[w], run, sums.uu.data(), sums.yu.data());
       break;
     case CorrelatorKind::kPolarity:
-      detail::polarity_run(&u_neg_[a], &u_neg_[w], run, neg_uu_.data());
-      detail::polarity_run(&y_neg_[a], &u_neg_[w], run, neg_yu_.data());
+      detail::polarity_run(&u_neg_[a], &u_neg_[w], run, sums.neg_uu.data());
+      detail::polarity_run(&y_neg_[a], &u_neg_[w], run, sums.neg_yu.data());
       break;
   }
-  next_anchor_ += count * s;
+}
+
+void StreamingCorrelator::process_ready() {
+  const Eigen::Index count = ready_anchors();
+  accumulate(count, sums_);
+  next_anchor_ += count * options_.correlator.skip;
   block_products_ += count;
   products_ += count;
 }
@@ -144,16 +156,15 @@ void StreamingCorrelator::compact() {
   buf_start_ += d;
 }
 
-// Mean of the accumulated sums, reverse lag order; channel 0 = uu, 1 = yu.
-Eigen::VectorXd StreamingCorrelator::current_mean(int channel) const {
-  Eigen::VectorXd r(lags_);
-  const auto m = static_cast<double>(block_products_);
-  const bool polarity = options_.correlator.kind == CorrelatorKind::kPolarity;
-  const auto& sums = channel == 0 ? sum_uu_ : sum_yu_;
-  const auto& neg = channel == 0 ? neg_uu_ : neg_yu_;
-  for (Eigen::Index j = 0; j < lags_; ++j) {
+// Mean over sums with m products, reverse lag order; channel 0 = uu, 1 = yu.
+static Eigen::VectorXd mean_of(const auto& sums, int channel, Eigen::Index m, bool polarity) {
+  const auto& s = channel == 0 ? sums.uu : sums.yu;
+  const auto& neg = channel == 0 ? sums.neg_uu : sums.neg_yu;
+  Eigen::VectorXd r(static_cast<Eigen::Index>(s.size()));
+  const auto n = static_cast<double>(m);
+  for (Eigen::Index j = 0; j < r.size(); ++j) {
     const auto k = static_cast<size_t>(j);
-    r[j] = polarity ? 1.0 - 2.0 * static_cast<double>(neg[k]) / m : sums[k] / m;
+    r[j] = polarity ? 1.0 - 2.0 * static_cast<double>(neg[k]) / n : s[k] / n;
   }
   return r;
 }
@@ -163,7 +174,9 @@ void StreamingCorrelator::finish_block() {
   if (block_products_ == 0) return;  // still filling the first lag window
   ++blocks_;
   if (options_.averaging == Averaging::kCumulative) return;  // sums keep running
-  const Eigen::VectorXd uu = current_mean(0), yu = current_mean(1);
+  const bool polarity = options_.correlator.kind == CorrelatorKind::kPolarity;
+  const Eigen::VectorXd uu = mean_of(sums_, 0, block_products_, polarity);
+  const Eigen::VectorXd yu = mean_of(sums_, 1, block_products_, polarity);
   if (blocks_ == 1) {
     avg_uu_ = uu;
     avg_yu_ = yu;
@@ -171,10 +184,10 @@ void StreamingCorrelator::finish_block() {
     avg_uu_ += (uu - avg_uu_) / options_.weight;
     avg_yu_ += (yu - avg_yu_) / options_.weight;
   }
-  std::fill(sum_uu_.begin(), sum_uu_.end(), 0.0);
-  std::fill(sum_yu_.begin(), sum_yu_.end(), 0.0);
-  std::fill(neg_uu_.begin(), neg_uu_.end(), 0);
-  std::fill(neg_yu_.begin(), neg_yu_.end(), 0);
+  std::fill(sums_.uu.begin(), sums_.uu.end(), 0.0);
+  std::fill(sums_.yu.begin(), sums_.yu.end(), 0.0);
+  std::fill(sums_.neg_uu.begin(), sums_.neg_uu.end(), 0);
+  std::fill(sums_.neg_yu.begin(), sums_.neg_yu.end(), 0);
   block_products_ = 0;
 }
 
@@ -189,22 +202,28 @@ Correlation StreamingCorrelator::finalise(const Eigen::VectorXd& reversed) const
   return c;
 }
 
-Correlation StreamingCorrelator::ruu() const {
-  if (options_.averaging == Averaging::kExponential && blocks_ > 0) return finalise(avg_uu_);
-  if (block_products_ == 0) {
+// Running mean of the current block (kCumulative: of everything), deferred anchors included.
+Correlation StreamingCorrelator::block_mean(int channel) const {
+  const Eigen::Index pending = ready_anchors();
+  if (block_products_ + pending == 0) {
     throw std::logic_error("streaming correlator: no products yet (need " +
                            std::to_string(lags_) + " samples); check products() > 0");
   }
-  return finalise(current_mean(0));
+  const bool polarity = options_.correlator.kind == CorrelatorKind::kPolarity;
+  if (pending == 0) return finalise(mean_of(sums_, channel, block_products_, polarity));
+  Sums with_pending = sums_;
+  accumulate(pending, with_pending);
+  return finalise(mean_of(with_pending, channel, block_products_ + pending, polarity));
+}
+
+Correlation StreamingCorrelator::ruu() const {
+  if (options_.averaging == Averaging::kExponential && blocks_ > 0) return finalise(avg_uu_);
+  return block_mean(0);
 }
 
 Correlation StreamingCorrelator::ryu() const {
   if (options_.averaging == Averaging::kExponential && blocks_ > 0) return finalise(avg_yu_);
-  if (block_products_ == 0) {
-    throw std::logic_error("streaming correlator: no products yet (need " +
-                           std::to_string(lags_) + " samples); check products() > 0");
-  }
-  return finalise(current_mean(1));
+  return block_mean(1);
 }
 
 }  // namespace rig::signal

@@ -21,6 +21,8 @@
 // The kFft kind is accepted: each push() correlates its newly completed anchors by FFT
 // (efficient for large blocks only). Allocation happens at construction and while the
 // internal buffer grows to hold one push(); steady-state per-sample pushes do not allocate.
+// Per-sample pushes defer the products until a few anchors are ready (the kernels fold
+// several anchors into one pass over the lag window); readers include the deferred ones.
 #pragma once
 
 #include <cstdint>
@@ -56,17 +58,23 @@ class StreamingCorrelator {
 
   Eigen::Index blocks() const { return blocks_; }        // completed averaging blocks
   Eigen::Index samples() const { return received_; }     // samples received since reset
-  Eigen::Index products() const { return products_; }    // products per lag since reset
+  Eigen::Index products() const { return products_ + ready_anchors(); }  // per lag, since reset
   const StreamingOptions& options() const { return options_; }
   void reset();
 
  private:
+  struct Sums {  // per-lag sums in reverse lag order (j = P - k)
+    std::vector<double> uu, yu;
+    std::vector<std::int64_t> neg_uu, neg_yu;  // polarity: disagreement counts
+  };
   void append(double u, double y);
+  Eigen::Index ready_anchors() const;
+  void accumulate(Eigen::Index count, Sums& sums) const;
   void process_ready();
   void finish_block();
   void compact();
   Correlation finalise(const Eigen::VectorXd& r) const;
-  Eigen::VectorXd current_mean(int channel) const;
+  Correlation block_mean(int channel) const;
 
   StreamingOptions options_;
   Eigen::Index lags_ = 0, zero_ = 0, positive_ = 0;
@@ -75,9 +83,7 @@ class StreamingCorrelator {
   std::vector<std::uint64_t> u_mask_;                 // relay: sign bit of u
   std::vector<std::uint8_t> u_neg_, y_neg_;           // polarity: 1 where negative
   Eigen::Index buf_start_ = 0, received_ = 0, next_anchor_ = 0;
-  // Per-lag sums (reverse lag order, j = P - k) of the current block: channel 0 = uu, 1 = yu.
-  std::vector<double> sum_uu_, sum_yu_;
-  std::vector<std::int64_t> neg_uu_, neg_yu_;         // polarity: disagreement counts
+  Sums sums_;  // of the current block (kCumulative: of everything since reset)
   Eigen::Index block_products_ = 0, block_received_ = 0, products_ = 0, blocks_ = 0;
   Eigen::VectorXd avg_uu_, avg_yu_;                   // exponential averages (reverse order)
 };

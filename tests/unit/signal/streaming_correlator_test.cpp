@@ -65,7 +65,16 @@ TEST(StreamingCorrelator, SampleBySampleEqualsBatch) {
   const Record rec = record(3000, 111);
   const CorrelatorOptions co{.lags = 256, .skip = 2, .kind = CorrelatorKind::kRelay};
   StreamingCorrelator sc({.correlator = co, .averaging = Averaging::kCumulative});
-  for (Eigen::Index i = 0; i < rec.u.size(); ++i) sc.push(rec.u[i], rec.y[i]);
+  for (Eigen::Index i = 0; i < rec.u.size(); ++i) {
+    sc.push(rec.u[i], rec.y[i]);
+    const Eigen::Index n = i + 1;
+    if (n == 256 || n == 257 || n == 1001 || n == 2999) {  // reads mid-stream see every product
+      const Eigen::VectorXd u = rec.u.head(n), y = rec.y.head(n);
+      EXPECT_LT(max_abs_diff(sc.ryu(), cross_correlation(y, u, co)), 1e-12) << n;
+      EXPECT_LT(max_abs_diff(sc.ruu(), auto_correlation(u, co)), 1e-12) << n;
+      EXPECT_EQ(sc.products(), products_per_lag(co, n)) << n;
+    }
+  }
   EXPECT_LT(max_abs_diff(sc.ryu(), cross_correlation(rec.y, rec.u, co)), 1e-12);
   EXPECT_EQ(sc.samples(), 3000);
 }
