@@ -1,0 +1,213 @@
+// plantsim's Modbus TCP server against a real libmodbus client over 127.0.0.1: the register
+// map, lockstep, heartbeat loss, and misbehaving clients.
+#include <arpa/inet.h>
+#include <netinet/in.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstring>
+#include <thread>
+
+#include "tests/integration/serve/serve_fixture.hpp"
+
+namespace plantsim::testing {
+namespace {
+
+namespace map = drivers::modbus_map;
+using Clock = std::chrono::steady_clock;
+
+int raw_connect(int port) {
+  const int fd = socket(AF_INET, SOCK_STREAM, 0);
+  sockaddr_in addr{};
+  addr.sin_family = AF_INET;
+  addr.sin_port = htons(static_cast<std::uint16_t>(port));
+  addr.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  if (connect(fd, reinterpret_cast<sockaddr*>(&addr), sizeof addr) != 0) {
+    close(fd);
+    return -1;
+  }
+  timeval tv{2, 0};
+  setsockopt(fd, SOL_SOCKET, SO_RCVTIMEO, &tv, sizeof tv);
+  return fd;
+}
+
+TEST(ModbusTcp, LockstepAdvancesExactlyTheTicksWrittenBeforeAnswering) {
+  auto s = start_served(linear_program(), {"--modbus", "tcp://127.0.0.1:0", "--clock", "lockstep"});
+  auto ctx = connect_tcp(s.modbus_port);
+  ASSERT_TRUE(ctx);
+  const auto r0 = read_inputs(ctx.get());
+  EXPECT_EQ(r0[map::kInCounter], 0);
+  EXPECT_EQ(time_ms_of(r0), 0u);
+  std::this_thread::sleep_for(50ms);  // lockstep: wall time must not move the plant
+  EXPECT_EQ(read_inputs(ctx.get())[map::kInCounter], 0);
+  advance(ctx.get(), 37);
+  const auto r1 = read_inputs(ctx.get());
+  EXPECT_EQ(r1[map::kInCounter], 37);
+  EXPECT_EQ(time_ms_of(r1), 37u);
+  // The answer to a read of holding 100 is the last N written.
+  std::uint16_t n = 0;
+  ASSERT_EQ(modbus_read_registers(ctx.get(), map::kHoldLockstepTicks, 1, &n), 1);
+  EXPECT_EQ(n, 37);
+}
+
+TEST(ModbusTcp, BiasAppliedOnlyWhenEnabledAndEchoedWithStatus) {
+  auto s = start_served(linear_program(), {"--modbus", "tcp://127.0.0.1:0", "--clock", "lockstep"});
+  auto ctx = connect_tcp(s.modbus_port);
+  ASSERT_TRUE(ctx);
+  write_command(ctx.get(), -1234, 1, /*enable=*/false);
+  advance(ctx.get(), 1);
+  auto r = read_inputs(ctx.get());
+  EXPECT_EQ(bias_echo_of(r), 0);
+  EXPECT_EQ(r[map::kInStatus] & drivers::kBiasActive, 0);
+  EXPECT_EQ(r[map::kInStatus] & drivers::kHeartbeatLost, 0);
+  write_command(ctx.get(), -1234, 2, /*enable=*/true);
+  advance(ctx.get(), 1);
+  r = read_inputs(ctx.get());
+  EXPECT_EQ(bias_echo_of(r), -1234);
+  EXPECT_NE(r[map::kInStatus] & drivers::kBiasActive, 0);
+  EXPECT_NE(r[map::kInStatus] & drivers::kRunning, 0);
+  // Holding registers read back what was written.
+  std::uint16_t h[3] = {};
+  ASSERT_EQ(modbus_read_registers(ctx.get(), 0, 3, h), 3);
+  EXPECT_EQ(static_cast<std::int16_t>(h[0]), -1234);
+  EXPECT_EQ(h[1], 2);
+  EXPECT_EQ(h[2], 1);
+}
+
+// In lockstep the heartbeat rule runs on plant time: the bias survives 500 ticks of 1 ms
+// without a heartbeat change and is gone at the 501st (500 ms + 1 tick).
+TEST(ModbusTcp, LockstepHeartbeatLossAfter500msOfPlantTime) {
+  auto s = start_served(linear_program(), {"--modbus", "tcp://127.0.0.1:0", "--clock", "lockstep"});
+  auto ctx = connect_tcp(s.modbus_port);
+  ASSERT_TRUE(ctx);
+  write_command(ctx.get(), 2500, 1);
+  advance(ctx.get(), 500);
+  auto r = read_inputs(ctx.get());
+  EXPECT_EQ(bias_echo_of(r), 2500);
+  EXPECT_EQ(r[map::kInStatus] & drivers::kHeartbeatLost, 0);
+  advance(ctx.get(), 1);
+  r = read_inputs(ctx.get());
+  EXPECT_EQ(bias_echo_of(r), 0);
+  EXPECT_NE(r[map::kInStatus] & drivers::kHeartbeatLost, 0);
+  EXPECT_EQ(r[map::kInStatus] & drivers::kBiasActive, 0);
+  // Writing the same heartbeat value again is not a heartbeat.
+  write_command(ctx.get(), 2500, 1);
+  advance(ctx.get(), 1);
+  EXPECT_EQ(bias_echo_of(read_inputs(ctx.get())), 0);
+  // A changed heartbeat re-applies the freshly written bias.
+  write_command(ctx.get(), 2500, 2);
+  advance(ctx.get(), 1);
+  EXPECT_EQ(bias_echo_of(read_inputs(ctx.get())), 2500);
+}
+
+// Realtime: after the last heartbeat write the echo must still be there 450 ms later and be
+// zero no later than 500 ms + 1 tick after the server saw the write. The server saw it between
+// sending the request and the answer, so the bounds are taken from those two instants; the
+// upper bound allows 15 ms for this test process to be scheduled on a shared machine.
+TEST(ModbusTcp, RealtimeHeartbeatLossWithin500msPlusOneTick) {
+  auto s = start_served(linear_program(), {"--modbus", "tcp://127.0.0.1:0"});
+  auto ctx = connect_tcp(s.modbus_port);
+  ASSERT_TRUE(ctx);
+  for (std::uint16_t hb = 1; hb <= 10; ++hb) {
+    write_command(ctx.get(), 1500, hb);
+    std::this_thread::sleep_for(10ms);
+  }
+  EXPECT_EQ(bias_echo_of(read_inputs(ctx.get())), 1500);
+  const auto sent = Clock::now();
+  write_command(ctx.get(), 1500, 11);
+  const auto answered = Clock::now();
+  Clock::time_point dropped{};
+  std::array<std::uint16_t, 10> r{};
+  while (Clock::now() - sent < 2s) {
+    r = read_inputs(ctx.get());
+    if (bias_echo_of(r) == 0) {
+      dropped = Clock::now();
+      break;
+    }
+    std::this_thread::sleep_for(1ms);
+  }
+  ASSERT_NE(dropped, Clock::time_point{}) << "bias never dropped";
+  const auto after_ms = [](auto d) { return std::chrono::duration<double, std::milli>(d).count(); };
+  std::printf("bias dropped %.1f ms after the last heartbeat write (answered after %.1f ms)\n",
+              after_ms(dropped - sent), after_ms(answered - sent));
+  EXPECT_GE(after_ms(dropped - sent), 500.0);
+  EXPECT_LE(after_ms(dropped - answered), 500.0 + 1.0 + 15.0);
+  EXPECT_NE(r[map::kInStatus] & drivers::kHeartbeatLost, 0);
+}
+
+TEST(ModbusTcp, IllegalAddressesAndFunctionsAnsweredWithExceptions) {
+  auto s = start_served(linear_program(), {"--modbus", "tcp://127.0.0.1:0", "--clock", "lockstep"});
+  auto ctx = connect_tcp(s.modbus_port);
+  ASSERT_TRUE(ctx);
+  std::uint16_t regs[20] = {};
+  EXPECT_EQ(modbus_read_input_registers(ctx.get(), 5, 6, regs), -1);  // 5..10: 10 is past the end
+  EXPECT_EQ(errno, EMBXILADD);
+  EXPECT_EQ(modbus_read_registers(ctx.get(), 101, 1, regs), -1);
+  EXPECT_EQ(errno, EMBXILADD);
+  EXPECT_EQ(modbus_write_register(ctx.get(), 200, 1), -1);
+  EXPECT_EQ(errno, EMBXILADD);
+  EXPECT_EQ(modbus_write_registers(ctx.get(), 99, 3, regs), -1);  // 99..101
+  EXPECT_EQ(errno, EMBXILADD);
+  std::uint8_t bits[8] = {};
+  EXPECT_EQ(modbus_read_bits(ctx.get(), 0, 1, bits), -1);  // no coils in this map
+  EXPECT_EQ(errno, EMBXILADD);
+  // An unknown function code (0x41) -> exception 01, illegal function.
+  const std::uint8_t raw[] = {1, 0x41, 0, 0, 0, 1};
+  ASSERT_GT(modbus_send_raw_request(ctx.get(), raw, sizeof raw), 0);
+  std::uint8_t rsp[MODBUS_TCP_MAX_ADU_LENGTH];
+  EXPECT_EQ(modbus_receive_confirmation(ctx.get(), rsp), 9);
+  EXPECT_EQ(rsp[7], 0x41 | 0x80);
+  EXPECT_EQ(rsp[8], MODBUS_EXCEPTION_ILLEGAL_FUNCTION);
+  // An illegal write changed nothing and the connection still works.
+  EXPECT_EQ(modbus_read_registers(ctx.get(), 0, 3, regs), 3);
+  EXPECT_EQ(regs[0], 0);
+}
+
+// Garbage on one connection closes that connection only; a half frame from a stalled client
+// does not delay the others; new connections are still accepted.
+TEST(ModbusTcp, GarbageAndStalledClientsDoNotStopTheServer) {
+  auto s = start_served(linear_program(), {"--modbus", "tcp://127.0.0.1:0", "--clock", "lockstep"});
+  auto good = connect_tcp(s.modbus_port);
+  ASSERT_TRUE(good);
+  const int garbage = raw_connect(s.modbus_port);
+  const int stalled = raw_connect(s.modbus_port);
+  ASSERT_GE(garbage, 0);
+  ASSERT_GE(stalled, 0);
+  const char junk[] = "GET / HTTP/1.1\r\nHost: plantsim\r\n\r\n";
+  ASSERT_GT(send(garbage, junk, sizeof junk - 1, 0), 0);
+  char buf[64];
+  EXPECT_EQ(recv(garbage, buf, sizeof buf, 0), 0) << "a non-Modbus stream should be closed";
+  const std::uint8_t half[] = {0x00, 0x01, 0x00};  // 3 of a 12-byte request, never finished
+  ASSERT_EQ(send(stalled, half, sizeof half, 0), 3);
+  const auto t0 = Clock::now();
+  advance(good.get(), 5);
+  EXPECT_EQ(read_inputs(good.get())[map::kInCounter], 5);
+  EXPECT_LT(Clock::now() - t0, 200ms);
+  auto late = connect_tcp(s.modbus_port);
+  ASSERT_TRUE(late);
+  EXPECT_EQ(read_inputs(late.get())[map::kInCounter], 5);
+  close(garbage);
+  close(stalled);
+}
+
+TEST(ModbusTcp, LockstepIsDeterministicForASeed) {
+  auto run = [](const std::string& seed) {
+    auto s = start_served(linear_program(), {"--modbus", "tcp://127.0.0.1:0", "--clock",
+                                             "lockstep", "--seed", seed});
+    auto ctx = connect_tcp(s.modbus_port);
+    EXPECT_TRUE(ctx);
+    return ctx ? scripted_exchange(ctx.get(), 300) : std::vector<std::uint16_t>{};
+  };
+  const auto a = run("7");
+  const auto b = run("7");
+  const auto c = run("8");
+  ASSERT_EQ(a.size(), 3000u);
+  EXPECT_EQ(a, b) << "seed 7 twice";
+  EXPECT_NE(a, c) << "seeds 7 and 8 should differ (the plant has measurement noise)";
+  // Each exchange advanced exactly 10 ticks.
+  for (std::size_t k = 0; k < 300; ++k) EXPECT_EQ(a[10 * k + map::kInCounter], 10 * (k + 1));
+}
+
+}  // namespace
+}  // namespace plantsim::testing
