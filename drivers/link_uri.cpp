@@ -56,6 +56,19 @@ LinkResult<void> apply_query_item(std::string_view uri, std::string_view item, L
   if (key == "baud" && rtu) return number(1, 4000000, out.baud, "a positive baud rate");
   if (key == "data" && rtu) return number(5, 8, out.data_bits, "data bits 5..8");
   if (key == "stop" && rtu) return number(1, 2, out.stop_bits, "stop bits 1 or 2");
+  if (key == "command" && out.is_can()) {
+    if (value != "ff50" && value != "tsc1") return uri_error(uri, part, "expected ff50 or tsc1");
+    out.can_command = value == "tsc1" ? CanCommand::kTsc1 : CanCommand::kBiasFrame;
+    return {};
+  }
+  if (key == "sync_rpm" && out.is_can()) {
+    const auto* end = value.data() + value.size();
+    auto [ptr, ec] = std::from_chars(value.data(), end, out.sync_rpm);
+    if (value.empty() || ec != std::errc{} || ptr != end || !(out.sync_rpm > 0.0)) {
+      return uri_error(uri, part, "expected a positive speed in rpm");
+    }
+    return {};
+  }
   if (key == "parity" && rtu) {
     if (value.size() != 1 || (value[0] != 'N' && value[0] != 'E' && value[0] != 'O')) {
       return uri_error(uri, part, "expected parity N, E or O");
@@ -67,7 +80,7 @@ LinkResult<void> apply_query_item(std::string_view uri, std::string_view item, L
                    std::string("unknown key for ") + to_string(out.scheme) +
                        (rtu               ? " (expected unit, baud, parity, data, stop)"
                         : out.is_modbus() ? " (expected unit)"
-                                          : " (expected none)"));
+                                          : " (expected command, sync_rpm)"));
 }
 
 LinkResult<void> parse_query(std::string_view uri, std::string_view query, LinkUri& out) {
@@ -148,6 +161,9 @@ LinkResult<LinkUri> parse_link_uri(std::string_view uri_in, std::string_view def
                          std::string(scheme) + "'");
   }
   if (auto r = parse_query(uri, query, out); !r) return r.error();
+  if (out.can_command == CanCommand::kTsc1 && out.sync_rpm <= 0.0) {
+    return uri_error(uri, "query", "expected sync_rpm=<rpm> with command=tsc1");
+  }
   return out;
 }
 

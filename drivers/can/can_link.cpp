@@ -56,14 +56,26 @@ LinkResult<void> CanLink::configure() {
   return {};
 }
 
+// 0xFF50 carries the bias and the enable bit. TSC1 carries only a speed request
+// n = sync_rpm (1 + bias / 100); it has no enable bit, so disabling sends the synchronous speed
+// (zero bias) and the governor's TSC1 timeout releases the override when the frames stop.
 LinkResult<void> CanLink::send_command(double bias_pct, bool enable, const char* call) {
   if (!endpoint_) return not_configured(call);
   tx_counter_ = static_cast<std::uint8_t>((tx_counter_ + 1) & 0x0F);
-  const can_frame f = j::encode_rig_command({bias_pct, enable, tx_counter_});
+  const bool tsc1 = uri_.can_command == CanCommand::kTsc1;
+  const double applied_pct = bias_from_raw(quantise_bias(bias_pct));
+  const can_frame f =
+      tsc1 ? j::encode_tsc1(
+                 {uri_.sync_rpm * (1.0 + (enable ? applied_pct : 0.0) / 100.0), tx_counter_})
+           : j::encode_rig_command({bias_pct, enable, tx_counter_});
   auto r = endpoint_->send(f);
-  if (!r) return LinkError{r.error().kind, "PGN 0xFF50 on " + uri_.text, r.error().detail};
+  if (!r) {
+    return LinkError{r.error().kind,
+                     std::string(tsc1 ? "PGN 0x0000 (TSC1)" : "PGN 0xFF50") + " on " + uri_.text,
+                     r.error().detail};
+  }
   enabled_ = enable;
-  last_bias_pct_ = bias_from_raw(quantise_bias(bias_pct));
+  last_bias_pct_ = applied_pct;
   return {};
 }
 

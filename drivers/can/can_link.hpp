@@ -8,6 +8,8 @@
 //                EEC1 fills speed_rpm and GTACP/0xFF51 fill power_kw as they arrive.
 //                Frames from other source addresses are ignored.
 //   deactivate() ramp, then 0xFF50 {0, enable cleared}
+// With ?command=tsc1&sync_rpm=N the commands go out as TSC1 speed requests instead (see
+// CanCommand in link_uri.hpp); the heartbeat is TSC1's own 4-bit counter.
 // CAN carries no frequency, voltage or bias echo: those Sample fields stay 0. plant_time_s is
 // counter * LinkOptions::plant_tick when that is set (the counter is unwrapped past 65535).
 #pragma once

@@ -41,6 +41,10 @@ class TestNode {
     return commands_;
   }
   int command_errors() const { return command_errors_; }
+  std::vector<j::Tsc1> tsc1() const {
+    std::lock_guard lock(mutex_);
+    return tsc1_;
+  }
 
   std::atomic<bool> freeze_counter{false};
   std::atomic<bool> corrupt{false};
@@ -64,6 +68,15 @@ class TestNode {
         std::lock_guard lock(mutex_);
         commands_.push_back(*c);
         bias_pct_ = c->enable ? c->bias_pct : 0.0;
+      } else if (j::pgn_of(*f) == j::kPgnTsc1) {
+        auto t =
+            j::decode_tsc1(*f, tsc1_.empty() ? std::nullopt : std::optional(tsc1_.back().counter));
+        std::lock_guard lock(mutex_);
+        if (t) {
+          tsc1_.push_back(*t);
+        } else {
+          ++command_errors_;
+        }
       } else if (auto l = j::decode_lockstep(*f); l && !silent) {
         for (int k = 0; k < l->ticks; ++k) tick();
         (void)ep_->send(j::encode_gtacp({power_w(), 0.0}));
@@ -84,18 +97,20 @@ class TestNode {
   std::atomic<bool> stop_{false};
   mutable std::mutex mutex_;
   std::vector<j::RigCommand> commands_;
+  std::vector<j::Tsc1> tsc1_;
   std::atomic<int> command_errors_{0};
   double bias_pct_ = 0.0;
   std::uint16_t counter_ = 100;
 };
 
-std::unique_ptr<drivers::GovernorLink> connect(const TestNode& node, bool lockstep = true) {
+std::unique_ptr<drivers::GovernorLink> connect(const TestNode& node, bool lockstep = true,
+                                               const std::string& query = "") {
   LinkOptions o;
   o.lockstep = lockstep;
   o.response_timeout = 200ms;
   o.ramp_rate_pct_per_s = 25.0;
   o.plant_tick = 1ms;
-  auto link = drivers::open_link("can+udp://127.0.0.1:" + std::to_string(node.port()), o);
+  auto link = drivers::open_link("can+udp://127.0.0.1:" + std::to_string(node.port()) + query, o);
   EXPECT_TRUE(link) << link.error().message();
   auto r = link.value()->configure();
   EXPECT_TRUE(r) << r.error().message();
@@ -169,6 +184,24 @@ TEST(CanLink, DeactivateRampsAndClearsEnable) {
   EXPECT_TRUE(c[3].enable);
   EXPECT_FALSE(c[4].enable);
   EXPECT_EQ(node.command_errors(), 0);
+}
+
+TEST(CanLink, Tsc1CommandsSpeedRequests) {
+  TestNode node;
+  auto link = connect(node, true, "?command=tsc1&sync_rpm=600");
+  ASSERT_TRUE(link->activate());
+  ASSERT_TRUE(link->write(1.0));
+  ASSERT_TRUE(link->write(-0.5));
+  ASSERT_TRUE(link->deactivate());
+  std::this_thread::sleep_for(20ms);
+  const auto t = node.tsc1();
+  ASSERT_GE(t.size(), 4u);
+  EXPECT_DOUBLE_EQ(t[0].speed_rpm, 600.0);  // activate: synchronous speed, zero bias
+  EXPECT_DOUBLE_EQ(t[1].speed_rpm, 606.0);  // 600 (1 + 1 %)
+  EXPECT_DOUBLE_EQ(t[2].speed_rpm, 597.0);
+  EXPECT_DOUBLE_EQ(t.back().speed_rpm, 600.0);
+  EXPECT_EQ(node.command_errors(), 0);  // TSC1 counter +1 per frame, checksums good
+  EXPECT_TRUE(node.commands().empty());
 }
 
 TEST(CanLink, CorruptFrameIsChecksumError) {

@@ -45,6 +45,14 @@ TEST(LinkUri, CanForms) {
   EXPECT_TRUE(u->is_can());
 }
 
+TEST(LinkUri, CanTsc1Command) {
+  auto u = parse_link_uri("can+udp://127.0.0.1:29536?command=tsc1&sync_rpm=600");
+  ASSERT_TRUE(u) << u.error().message();
+  EXPECT_EQ(u->can_command, drivers::CanCommand::kTsc1);
+  EXPECT_DOUBLE_EQ(u->sync_rpm, 600.0);
+  EXPECT_EQ(parse_link_uri("can+socketcan:can0")->can_command, drivers::CanCommand::kBiasFrame);
+}
+
 TEST(LinkUri, DefaultFamilyForPlantsimOptions) {
   auto m = parse_link_uri("tcp://127.0.0.1:1502", "modbus");
   ASSERT_TRUE(m);
@@ -81,4 +89,8 @@ TEST(LinkUri, ErrorsNameThePartAndWhatWasExpected) {
   expect_error("modbus+rtu:?baud=9600", "device", "serial device");
   expect_error("can+socketcan:", "device", "CAN interface");
   expect_error("can+udp://127.0.0.1:29536?unit=1", "query 'unit=1'", "unknown key");
+  expect_error("can+socketcan:can0?command=tsc1", "query", "sync_rpm=<rpm>");
+  expect_error("can+socketcan:can0?command=speed", "query 'command=speed'", "ff50 or tsc1");
+  expect_error("can+socketcan:can0?sync_rpm=-5", "query 'sync_rpm=-5'", "positive speed");
+  expect_error("modbus+tcp://h:1?command=tsc1", "query 'command=tsc1'", "expected unit");
 }
