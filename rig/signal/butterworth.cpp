@@ -12,9 +12,10 @@ ButterworthLowPass::ButterworthLowPass(int order, double corner_hz, double dt_s)
     throw std::invalid_argument("Butterworth: order must be 1..8, got " + std::to_string(order));
   }
   if (!(dt_s > 0.0) || !(corner_hz > 0.0) || !(corner_hz < 0.5 / dt_s)) {
-    throw std::invalid_argument("Butterworth: need dt_s > 0 and 0 < corner_hz < Nyquist, got "
-                                "corner_hz=" + std::to_string(corner_hz) +
-                                " dt_s=" + std::to_string(dt_s));
+    throw std::invalid_argument(
+        "Butterworth: need dt_s > 0 and 0 < corner_hz < Nyquist, got "
+        "corner_hz=" +
+        std::to_string(corner_hz) + " dt_s=" + std::to_string(dt_s));
   }
   const double k = 2.0 / dt_s;
   const double wc = k * std::tan(std::numbers::pi * corner_hz * dt_s);

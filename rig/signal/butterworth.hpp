@@ -5,10 +5,9 @@
 // plus a first-order section for odd n, each in transposed direct form II.
 #pragma once
 
+#include <Eigen/Core>
 #include <complex>
 #include <vector>
-
-#include <Eigen/Core>
 
 namespace rig::signal {
 

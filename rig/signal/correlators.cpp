@@ -64,16 +64,15 @@ Eigen::Index resolved_zero_index(const CorrelatorOptions& options) {
 void validate(const CorrelatorOptions& o, Eigen::Index samples) {
   if (o.lags < 1) fail("lags must be >= 1, got " + std::to_string(o.lags));
   if (o.zero_index < -1 || o.zero_index >= o.lags) {
-    fail("zero_index must be -1 (automatic) or in [0, lags-1] = [0, " +
-         std::to_string(o.lags - 1) + "], got " + std::to_string(o.zero_index));
+    fail("zero_index must be -1 (automatic) or in [0, lags-1] = [0, " + std::to_string(o.lags - 1) +
+         "], got " + std::to_string(o.zero_index));
   }
   if (o.skip < 1) fail("skip must be >= 1, got " + std::to_string(o.skip));
   if (!(o.dt_s > 0.0) || !std::isfinite(o.dt_s)) {
     fail("dt_s must be a positive sample period, got " + std::to_string(o.dt_s));
   }
   if (o.arcsine_correction && o.kind != CorrelatorKind::kPolarity) {
-    fail(std::string("arcsine_correction applies to kPolarity only, kind is ") +
-         to_string(o.kind));
+    fail(std::string("arcsine_correction applies to kPolarity only, kind is ") + to_string(o.kind));
   }
   if (samples >= 0 && o.lags > samples) {
     fail("lags (" + std::to_string(o.lags) + ") exceed the record length (" +
@@ -118,10 +117,14 @@ Correlation auto_correlation(const Eigen::VectorXd& u, const CorrelatorOptions& 
 
 const char* to_string(CorrelatorKind kind) {
   switch (kind) {
-    case CorrelatorKind::kDirect: return "direct";
-    case CorrelatorKind::kFft: return "fft";
-    case CorrelatorKind::kRelay: return "relay";
-    case CorrelatorKind::kPolarity: return "polarity";
+    case CorrelatorKind::kDirect:
+      return "direct";
+    case CorrelatorKind::kFft:
+      return "fft";
+    case CorrelatorKind::kRelay:
+      return "relay";
+    case CorrelatorKind::kPolarity:
+      return "polarity";
   }
   return "unknown";
 }

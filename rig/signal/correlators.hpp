@@ -34,9 +34,9 @@ namespace rig::signal {
 enum class CorrelatorKind { kDirect, kFft, kRelay, kPolarity };
 
 struct CorrelatorOptions {
-  Eigen::Index lags = 256;          // total samples in the two-sided window
-  Eigen::Index zero_index = -1;     // -1: automatic (40 % into the window)
-  int skip = 1;                     // Fell's skip: form every skip-th product
+  Eigen::Index lags = 256;       // total samples in the two-sided window
+  Eigen::Index zero_index = -1;  // -1: automatic (40 % into the window)
+  int skip = 1;                  // Fell's skip: form every skip-th product
   CorrelatorKind kind = CorrelatorKind::kDirect;
   bool arcsine_correction = false;  // polarity only
   double dt_s = 0.01;               // sample period = lag resolution
@@ -46,8 +46,9 @@ struct CorrelatorOptions {
 Eigen::Index resolved_zero_index(const CorrelatorOptions& options);
 
 // Throws std::invalid_argument with a one-line message when options are unusable for a
-// record of `samples` samples (samples < 0: length not known yet, as when streaming) (lags < 1, zero_index outside the window, skip < 1,
-// dt_s <= 0, lags > samples, arcsine_correction without kPolarity).
+// record of `samples` samples (samples < 0: length not known yet, as when streaming) (lags < 1,
+// zero_index outside the window, skip < 1, dt_s <= 0, lags > samples, arcsine_correction without
+// kPolarity).
 void validate(const CorrelatorOptions& options, Eigen::Index samples);
 
 // Number of products N' formed per lag for a record of `samples` samples.

@@ -81,12 +81,11 @@ Eigen::VectorXd gaussian_excitation(const GaussianOptions& o) {
 std::vector<int> prbs_taps(int register_length) {
   // Xilinx XAPP052 (Alfke 1996), table 3: taps for maximal-length LFSRs.
   static const std::vector<std::vector<int>> kTaps = {
-      {2, 1},          {3, 2},          {4, 3},          {5, 3},          {6, 5},
-      {7, 6},          {8, 6, 5, 4},    {9, 5},          {10, 7},         {11, 9},
-      {12, 6, 4, 1},   {13, 4, 3, 1},   {14, 5, 3, 1},   {15, 14},        {16, 15, 13, 4},
-      {17, 14},        {18, 11},        {19, 6, 2, 1},   {20, 17},        {21, 19},
-      {22, 21},        {23, 18},        {24, 23, 22, 17}, {25, 22},       {26, 6, 2, 1},
-      {27, 5, 2, 1},   {28, 25},        {29, 27},        {30, 6, 4, 1},   {31, 28}};
+      {2, 1},        {3, 2},        {4, 3},          {5, 3},   {6, 5},           {7, 6},
+      {8, 6, 5, 4},  {9, 5},        {10, 7},         {11, 9},  {12, 6, 4, 1},    {13, 4, 3, 1},
+      {14, 5, 3, 1}, {15, 14},      {16, 15, 13, 4}, {17, 14}, {18, 11},         {19, 6, 2, 1},
+      {20, 17},      {21, 19},      {22, 21},        {23, 18}, {24, 23, 22, 17}, {25, 22},
+      {26, 6, 2, 1}, {27, 5, 2, 1}, {28, 25},        {29, 27}, {30, 6, 4, 1},    {31, 28}};
   if (register_length < 2 || register_length > 31) {
     fail("PRBS register_length must be 2..31, got " + std::to_string(register_length));
   }
@@ -96,7 +95,8 @@ std::vector<int> prbs_taps(int register_length) {
 Eigen::VectorXd prbs_excitation(const PrbsOptions& o) {
   check_common(o.n, 1.0);
   const std::vector<int> taps = prbs_taps(o.register_length);
-  if (o.clock_divider < 1) fail("PRBS clock_divider must be >= 1, got " + std::to_string(o.clock_divider));
+  if (o.clock_divider < 1)
+    fail("PRBS clock_divider must be >= 1, got " + std::to_string(o.clock_divider));
   if (!(o.amplitude > 0.0)) fail("PRBS amplitude must be > 0, got " + std::to_string(o.amplitude));
   const std::uint32_t period = (std::uint32_t{1} << o.register_length) - 1U;
   std::uint32_t mask = 0;
@@ -157,7 +157,8 @@ Eigen::VectorXd multisine_excitation(const MultisineOptions& o) {
     }
   }
   Eigen::VectorXd x = Eigen::VectorXd::Zero(o.n);
-  const Eigen::ArrayXd t = Eigen::ArrayXd::LinSpaced(o.n, 0.0, static_cast<double>(o.n - 1)) * o.dt_s;
+  const Eigen::ArrayXd t =
+      Eigen::ArrayXd::LinSpaced(o.n, 0.0, static_cast<double>(o.n - 1)) * o.dt_s;
   for (size_t k = 0; k < count; ++k) {
     x.array() += amp[k] * (2.0 * std::numbers::pi * o.frequencies_hz[k] * t + phase[k]).cos();
   }
@@ -166,7 +167,8 @@ Eigen::VectorXd multisine_excitation(const MultisineOptions& o) {
 }
 
 double crest_factor(const Eigen::VectorXd& x) {
-  const double rms = x.size() > 0 ? std::sqrt(x.squaredNorm() / static_cast<double>(x.size())) : 0.0;
+  const double rms =
+      x.size() > 0 ? std::sqrt(x.squaredNorm() / static_cast<double>(x.size())) : 0.0;
   if (!(rms > 0.0)) throw std::invalid_argument("crest_factor: record is empty or all zero");
   return x.cwiseAbs().maxCoeff() / rms;
 }

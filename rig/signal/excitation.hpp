@@ -3,10 +3,9 @@
 // std:: distributions, whose algorithms differ between standard libraries.
 #pragma once
 
+#include <Eigen/Core>
 #include <cstdint>
 #include <vector>
-
-#include <Eigen/Core>
 
 namespace rig::signal {
 
@@ -22,15 +21,15 @@ namespace rig::signal {
 // Bandwidth: bandwidth_hz, or when it is 0, twice resonance_hz (thesis: "bandwidth about
 // twice the resonant frequency"); the defaults give 4 Hz for the ~2 Hz diesel/alternator mode.
 struct GaussianOptions {
-  Eigen::Index n = 4096;       // samples
-  double dt_s = 0.01;          // sample period
-  double bandwidth_hz = 0.0;   // low-pass corner (< 0.5/dt_s); 0: 2 * resonance_hz
-  double sigma = 1.0;          // output standard deviation (output units)
-  double clip_sigma = 0.0;     // clip at +-clip_sigma*sigma; 0 = no clipping (else >= 1)
+  Eigen::Index n = 4096;      // samples
+  double dt_s = 0.01;         // sample period
+  double bandwidth_hz = 0.0;  // low-pass corner (< 0.5/dt_s); 0: 2 * resonance_hz
+  double sigma = 1.0;         // output standard deviation (output units)
+  double clip_sigma = 0.0;    // clip at +-clip_sigma*sigma; 0 = no clipping (else > 1)
   std::uint64_t seed = 1;
-  int filter_order = 4;        // Butterworth order, 1..8
-  Eigen::Index warmup = -1;    // filter settling samples discarded; -1: 20 / (fc dt_s)
-  double resonance_hz = 2.0;   // expected resonance, used when bandwidth_hz is 0
+  int filter_order = 4;       // Butterworth order, 1..8
+  Eigen::Index warmup = -1;   // filter settling samples discarded; -1: 20 / (fc dt_s)
+  double resonance_hz = 2.0;  // expected resonance, used when bandwidth_hz is 0
 };
 Eigen::VectorXd gaussian_excitation(const GaussianOptions& options);
 
@@ -71,8 +70,8 @@ struct MultisineOptions {
   std::vector<double> frequencies_hz;  // each in (0, 0.5/dt_s)
   std::vector<double> amplitudes;      // empty: all 1; else same length as frequencies_hz
   MultisinePhases phases = MultisinePhases::kSchroeder;
-  std::uint64_t seed = 1;              // for kRandom
-  double rms = 0.0;                    // > 0: scale output to this sample rms
+  std::uint64_t seed = 1;  // for kRandom
+  double rms = 0.0;        // > 0: scale output to this sample rms
 };
 Eigen::VectorXd multisine_excitation(const MultisineOptions& options);
 

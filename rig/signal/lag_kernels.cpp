@@ -45,9 +45,8 @@ RIG_HOT_LOOP void direct_run(const double* a, const double* w, AnchorRun run,
   }
 }
 
-RIG_HOT_LOOP void direct_run2(const double* a1, const double* a2, const double* w,
-                              AnchorRun run, double* __restrict acc1,
-                              double* __restrict acc2) {
+RIG_HOT_LOOP void direct_run2(const double* a1, const double* a2, const double* w, AnchorRun run,
+                              double* __restrict acc1, double* __restrict acc2) {
   const Eigen::Index s = run.stride, lags = run.lags;
   Eigen::Index i = 0;
   for (; i + 4 <= run.count; i += 4) {
@@ -97,8 +96,7 @@ RIG_HOT_LOOP void relay_run(const double* a, const std::uint64_t* w_mask, Anchor
 }
 
 RIG_HOT_LOOP void relay_run2(const double* a1, const double* a2, const std::uint64_t* w_mask,
-                             AnchorRun run, double* __restrict acc1,
-                             double* __restrict acc2) {
+                             AnchorRun run, double* __restrict acc1, double* __restrict acc2) {
   const Eigen::Index s = run.stride, lags = run.lags;
   auto bits = [](const double* a, Eigen::Index i) { return std::bit_cast<std::uint64_t>(a[i]); };
   Eigen::Index i = 0;
@@ -126,8 +124,8 @@ RIG_HOT_LOOP void relay_run2(const double* a1, const double* a2, const std::uint
   }
 }
 
-RIG_HOT_LOOP void polarity_run(const std::uint8_t* a_neg, const std::uint8_t* w_neg,
-                               AnchorRun run, std::int64_t* __restrict disagree) {
+RIG_HOT_LOOP void polarity_run(const std::uint8_t* a_neg, const std::uint8_t* w_neg, AnchorRun run,
+                               std::int64_t* __restrict disagree) {
   const Eigen::Index s = run.stride, lags = run.lags;
   Eigen::Index i = 0;
   for (; i + 4 <= run.count; i += 4) {
@@ -138,8 +136,8 @@ RIG_HOT_LOOP void polarity_run(const std::uint8_t* a_neg, const std::uint8_t* w_
     const std::uint8_t* __restrict w2 = w1 + s;
     const std::uint8_t* __restrict w3 = w2 + s;
     for (Eigen::Index j = 0; j < lags; ++j) {
-      disagree[j] += static_cast<std::uint8_t>((n0 ^ w0[j]) + (n1 ^ w1[j]) + (n2 ^ w2[j]) +
-                                               (n3 ^ w3[j]));
+      disagree[j] +=
+          static_cast<std::uint8_t>((n0 ^ w0[j]) + (n1 ^ w1[j]) + (n2 ^ w2[j]) + (n3 ^ w3[j]));
     }
   }
   for (; i < run.count; ++i) {

@@ -9,9 +9,8 @@
 // disagreements, r = 1 - 2 disagreements / N'.
 #pragma once
 
-#include <cstdint>
-
 #include <Eigen/Core>
+#include <cstdint>
 
 namespace rig::signal::detail {
 
@@ -26,8 +25,8 @@ inline std::uint64_t sign_mask(double x) { return x < 0.0 ? kSignBit : 0ULL; }
 inline std::uint8_t is_negative(double x) { return x < 0.0 ? 1 : 0; }
 
 void direct_run(const double* a, const double* w, AnchorRun run, double* acc);
-void direct_run2(const double* a1, const double* a2, const double* w, AnchorRun run,
-                 double* acc1, double* acc2);
+void direct_run2(const double* a1, const double* a2, const double* w, AnchorRun run, double* acc1,
+                 double* acc2);
 void relay_run(const double* a, const std::uint64_t* w_mask, AnchorRun run, double* acc);
 void relay_run2(const double* a1, const double* a2, const std::uint64_t* w_mask, AnchorRun run,
                 double* acc1, double* acc2);

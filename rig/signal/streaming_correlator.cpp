@@ -33,12 +33,15 @@ StreamingCorrelator::StreamingCorrelator(const StreamingOptions& options) : opti
   u_.reserve(reserve);
   y_.reserve(reserve);
   switch (options_.correlator.kind) {
-    case CorrelatorKind::kRelay: u_mask_.reserve(reserve); break;
+    case CorrelatorKind::kRelay:
+      u_mask_.reserve(reserve);
+      break;
     case CorrelatorKind::kPolarity:
       u_neg_.reserve(reserve);
       y_neg_.reserve(reserve);
       break;
-    default: break;
+    default:
+      break;
   }
   reset();
 }
@@ -206,8 +209,8 @@ Correlation StreamingCorrelator::finalise(const Eigen::VectorXd& reversed) const
 Correlation StreamingCorrelator::block_mean(int channel) const {
   const Eigen::Index pending = ready_anchors();
   if (block_products_ + pending == 0) {
-    throw std::logic_error("streaming correlator: no products yet (need " +
-                           std::to_string(lags_) + " samples); check products() > 0");
+    throw std::logic_error("streaming correlator: no products yet (need " + std::to_string(lags_) +
+                           " samples); check products() > 0");
   }
   const bool polarity = options_.correlator.kind == CorrelatorKind::kPolarity;
   if (pending == 0) return finalise(mean_of(sums_, channel, block_products_, polarity));

@@ -25,10 +25,9 @@
 // several anchors into one pass over the lag window); readers include the deferred ones.
 #pragma once
 
+#include <Eigen/Core>
 #include <cstdint>
 #include <vector>
-
-#include <Eigen/Core>
 
 #include "rig/signal/correlation.hpp"
 #include "rig/signal/correlators.hpp"
@@ -56,8 +55,8 @@ class StreamingCorrelator {
   Correlation ruu() const;  // auto-correlation of u (relay: E[u(t) sgn(u(t - tau))])
   Correlation ryu() const;  // cross-correlation r_yu(tau) = E[y(t) u(t - tau)]
 
-  Eigen::Index blocks() const { return blocks_; }        // completed averaging blocks
-  Eigen::Index samples() const { return received_; }     // samples received since reset
+  Eigen::Index blocks() const { return blocks_; }     // completed averaging blocks
+  Eigen::Index samples() const { return received_; }  // samples received since reset
   Eigen::Index products() const { return products_ + ready_anchors(); }  // per lag, since reset
   const StreamingOptions& options() const { return options_; }
   void reset();
@@ -80,12 +79,12 @@ class StreamingCorrelator {
   Eigen::Index lags_ = 0, zero_ = 0, positive_ = 0;
   // Buffered samples, global index buf_start_ + i; kept from the oldest unconsumed window.
   std::vector<double> u_, y_;
-  std::vector<std::uint64_t> u_mask_;                 // relay: sign bit of u
-  std::vector<std::uint8_t> u_neg_, y_neg_;           // polarity: 1 where negative
+  std::vector<std::uint64_t> u_mask_;        // relay: sign bit of u
+  std::vector<std::uint8_t> u_neg_, y_neg_;  // polarity: 1 where negative
   Eigen::Index buf_start_ = 0, received_ = 0, next_anchor_ = 0;
   Sums sums_;  // of the current block (kCumulative: of everything since reset)
   Eigen::Index block_products_ = 0, block_received_ = 0, products_ = 0, blocks_ = 0;
-  Eigen::VectorXd avg_uu_, avg_yu_;                   // exponential averages (reverse order)
+  Eigen::VectorXd avg_uu_, avg_yu_;  // exponential averages (reverse order)
 };
 
 }  // namespace rig::signal

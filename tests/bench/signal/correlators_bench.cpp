@@ -24,8 +24,9 @@ const Signals& signals() {
   static const Signals s = [] {
     Signals out;
     out.u = gaussian_excitation({.n = kSamples, .dt_s = kTickS, .bandwidth_hz = 4.0, .seed = 1});
-    out.y = 0.7 * out.u + gaussian_excitation({.n = kSamples, .dt_s = kTickS, .bandwidth_hz = 20.0,
-                                               .sigma = 0.3, .seed = 2});
+    out.y = 0.7 * out.u +
+            gaussian_excitation(
+                {.n = kSamples, .dt_s = kTickS, .bandwidth_hz = 20.0, .sigma = 0.3, .seed = 2});
     return out;
   }();
   return s;
@@ -37,8 +38,8 @@ void per_sample_counters(benchmark::State& state, Eigen::Index samples_per_itera
   state.counters["s_per_sample"] = benchmark::Counter(
       samples, benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert);
   // Seconds of 100 Hz signal handled per second of CPU: the real-time factor (shown as "/s").
-  state.counters["realtime_x"] = benchmark::Counter(
-      samples * kTickS, benchmark::Counter::kIsIterationInvariantRate);
+  state.counters["realtime_x"] =
+      benchmark::Counter(samples * kTickS, benchmark::Counter::kIsIterationInvariantRate);
 }
 
 // Reference: r(k) = sum_t y_t u_{t-k}, one dot product per lag (lag-outer loop).
@@ -70,8 +71,10 @@ void BM_Correlator(benchmark::State& state, CorrelatorKind kind, int skip) {
 }
 BENCHMARK_CAPTURE(BM_Correlator, direct, CorrelatorKind::kDirect, 1)->Unit(benchmark::kMillisecond);
 BENCHMARK_CAPTURE(BM_Correlator, relay, CorrelatorKind::kRelay, 1)->Unit(benchmark::kMillisecond);
-BENCHMARK_CAPTURE(BM_Correlator, relay_skip8, CorrelatorKind::kRelay, 8)->Unit(benchmark::kMillisecond);
-BENCHMARK_CAPTURE(BM_Correlator, polarity, CorrelatorKind::kPolarity, 1)->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(BM_Correlator, relay_skip8, CorrelatorKind::kRelay, 8)
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(BM_Correlator, polarity, CorrelatorKind::kPolarity, 1)
+    ->Unit(benchmark::kMillisecond);
 BENCHMARK_CAPTURE(BM_Correlator, fft, CorrelatorKind::kFft, 1)->Unit(benchmark::kMillisecond);
 
 // The online loop per 100 Hz tick: AC-couple u and y, push one sample into the streaming
@@ -84,14 +87,18 @@ void BM_StreamingPipeline(benchmark::State& state, CorrelatorKind kind, int skip
                           .weight = 10.0,
                           .block_samples = 2048});
   for (auto _ : state) {
-    for (Eigen::Index i = 0; i < kSamples; ++i) sc.push(couple_u.step(s.u[i]), couple_y.step(s.y[i]));
+    for (Eigen::Index i = 0; i < kSamples; ++i)
+      sc.push(couple_u.step(s.u[i]), couple_y.step(s.y[i]));
     benchmark::DoNotOptimize(sc.products());
   }
   per_sample_counters(state, kSamples);
 }
-BENCHMARK_CAPTURE(BM_StreamingPipeline, direct, CorrelatorKind::kDirect, 1)->Unit(benchmark::kMillisecond);
-BENCHMARK_CAPTURE(BM_StreamingPipeline, relay, CorrelatorKind::kRelay, 1)->Unit(benchmark::kMillisecond);
-BENCHMARK_CAPTURE(BM_StreamingPipeline, relay_skip8, CorrelatorKind::kRelay, 8)->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(BM_StreamingPipeline, direct, CorrelatorKind::kDirect, 1)
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(BM_StreamingPipeline, relay, CorrelatorKind::kRelay, 1)
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(BM_StreamingPipeline, relay_skip8, CorrelatorKind::kRelay, 8)
+    ->Unit(benchmark::kMillisecond);
 
 void BM_GaussianExcitation(benchmark::State& state) {
   for (auto _ : state) {

@@ -139,7 +139,8 @@ TEST(Correlators, SkipIsUnbiasedAndOnlyAddsVariance) {
       Xoshiro256 rng(1000 + rec);
       Eigen::VectorXd u(n);
       for (auto& x : u) x = rng.normal();
-      est.col(rec) = cross_correlation(fir(h, u), u, {.lags = lags, .zero_index = z, .skip = skip}).r;
+      est.col(rec) =
+          cross_correlation(fir(h, u), u, {.lags = lags, .zero_index = z, .skip = skip}).r;
     }
     const Eigen::VectorXd mean = est.rowwise().mean();
     const Eigen::VectorXd sd =
@@ -147,7 +148,8 @@ TEST(Correlators, SkipIsUnbiasedAndOnlyAddsVariance) {
     for (Eigen::Index i = 0; i < lags; ++i) {
       const Eigen::Index k = i - z;
       const double truth = (k >= 0 && k < h.size()) ? h[k] : 0.0;
-      EXPECT_NEAR(mean[i], truth, 5.0 * sd[i] / std::sqrt(records)) << "skip " << skip << " lag " << k;
+      EXPECT_NEAR(mean[i], truth, 5.0 * sd[i] / std::sqrt(records))
+          << "skip " << skip << " lag " << k;
     }
     // Variance scales like 1/N' = skip/(n - lags + 1) for these nearly independent products.
     const double expected_sd = std::sqrt(skip / static_cast<double>(n - lags + 1));

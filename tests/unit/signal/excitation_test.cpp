@@ -16,7 +16,9 @@
 namespace rig::signal {
 namespace {
 
-double std_dev(const Eigen::VectorXd& x) { return std::sqrt((x.array() - x.mean()).square().mean()); }
+double std_dev(const Eigen::VectorXd& x) {
+  return std::sqrt((x.array() - x.mean()).square().mean());
+}
 
 // One-sided periodogram |X_k|^2, k = 0..n/2 (FFTW r2c).
 Eigen::VectorXd periodogram(const Eigen::VectorXd& x) {
@@ -158,19 +160,22 @@ TEST(PrbsExcitation, CircularAutocorrelationIsTwoValued) {
   for (int n : {7, 10}) {
     const Eigen::Index period = (Eigen::Index{1} << n) - 1;
     const double a = 1.5;
-    const Eigen::VectorXd x = prbs_excitation({.n = period, .register_length = n, .amplitude = a, .seed = 9});
+    const Eigen::VectorXd x =
+        prbs_excitation({.n = period, .register_length = n, .amplitude = a, .seed = 9});
     EXPECT_NEAR(x.mean(), a / static_cast<double>(period), 1e-12);
     for (Eigen::Index k = 0; k < period; ++k) {
       double r = 0.0;
       for (Eigen::Index i = 0; i < period; ++i) r += x[i] * x[(i + k) % period];
       r /= static_cast<double>(period);
-      ASSERT_NEAR(r, k == 0 ? a * a : -a * a / static_cast<double>(period), 1e-12) << "n " << n << " k " << k;
+      ASSERT_NEAR(r, k == 0 ? a * a : -a * a / static_cast<double>(period), 1e-12)
+          << "n " << n << " k " << k;
     }
   }
 }
 
 TEST(PrbsExcitation, DividerHoldsBitsAndSeedShiftsPhase) {
-  const Eigen::VectorXd slow = prbs_excitation({.n = 3 * 127, .register_length = 7, .clock_divider = 3});
+  const Eigen::VectorXd slow =
+      prbs_excitation({.n = 3 * 127, .register_length = 7, .clock_divider = 3});
   const Eigen::VectorXd fast = prbs_excitation({.n = 127, .register_length = 7});
   for (Eigen::Index i = 0; i < slow.size(); ++i) ASSERT_EQ(slow[i], fast[i / 3]);
   const Eigen::VectorXd other = prbs_excitation({.n = 127, .register_length = 7, .seed = 40});
@@ -209,8 +214,12 @@ TEST(MultisineExcitation, LinesAndAutocorrelationAreAnalytic) {
   const double dt_s = 0.01;
   const std::vector<double> f = harmonic_frequencies_hz(n0, dt_s, 3, 9);
   const std::vector<double> amp = {1.0, 0.5, 0.25, 2.0, 1.0, 0.7, 0.3};
-  const MultisineOptions o{.n = lags - 1 + periods * n0, .dt_s = dt_s, .frequencies_hz = f,
-                           .amplitudes = amp, .phases = MultisinePhases::kRandom, .seed = 12};
+  const MultisineOptions o{.n = lags - 1 + periods * n0,
+                           .dt_s = dt_s,
+                           .frequencies_hz = f,
+                           .amplitudes = amp,
+                           .phases = MultisinePhases::kRandom,
+                           .seed = 12};
   const Eigen::VectorXd x = multisine_excitation(o);
   const Eigen::VectorXd p = periodogram(x.head(periods * n0));
   for (size_t k = 0; k < f.size(); ++k) {

@@ -25,7 +25,8 @@ Record record(Eigen::Index n, std::uint64_t seed) {
 }
 
 // Pushes the record in the given (uneven) block sizes, the last block taking the rest.
-void push_in_blocks(StreamingCorrelator& sc, const Record& rec, const std::vector<Eigen::Index>& sizes) {
+void push_in_blocks(StreamingCorrelator& sc, const Record& rec,
+                    const std::vector<Eigen::Index>& sizes) {
   Eigen::Index at = 0;
   for (Eigen::Index s : sizes) {
     sc.push(rec.u.segment(at, s), rec.y.segment(at, s));
@@ -47,11 +48,11 @@ TEST(StreamingCorrelator, CumulativeBlocksEqualBatchForEveryKind) {
     for (int skip : {1, 3, 8}) {
       for (Eigen::Index z : {Eigen::Index{-1}, Eigen::Index{0}, Eigen::Index{63}}) {
         const CorrelatorOptions co{.lags = 64, .zero_index = z, .skip = skip, .kind = kind};
-        StreamingCorrelator sc({.correlator = co, .averaging = Averaging::kCumulative,
-                                .block_samples = 500});
+        StreamingCorrelator sc(
+            {.correlator = co, .averaging = Averaging::kCumulative, .block_samples = 500});
         push_in_blocks(sc, rec, {1, 7, 30, 300, 1000, 63, 64, 65});
-        const std::string what = std::string(to_string(kind)) + " skip " +
-                                 std::to_string(skip) + " z " + std::to_string(z);
+        const std::string what = std::string(to_string(kind)) + " skip " + std::to_string(skip) +
+                                 " z " + std::to_string(z);
         EXPECT_LT(max_abs_diff(sc.ryu(), cross_correlation(rec.y, rec.u, co)), 1e-12) << what;
         EXPECT_LT(max_abs_diff(sc.ruu(), auto_correlation(rec.u, co)), 1e-12) << what;
         EXPECT_EQ(sc.products(), products_per_lag(co, rec.u.size())) << what;
@@ -96,7 +97,8 @@ TEST(StreamingCorrelator, ExponentialAverageFollowsTheRecursion) {
     Eigen::Index last = anchor;
     while (last + 4 + z <= end - 1) last += 4;  // last anchor completed in this block
     Eigen::VectorXd mean(lags);
-    for (Eigen::Index i = 0; i < lags; ++i) mean[i] = test::naive_lag(rec.y, rec.u, i - z, anchor, last, 4);
+    for (Eigen::Index i = 0; i < lags; ++i)
+      mean[i] = test::naive_lag(rec.y, rec.u, i - z, anchor, last, 4);
     avg = blocks == 0 ? mean : Eigen::VectorXd(avg + (mean - avg) / w);
     ++blocks;
     anchor = last + 4;

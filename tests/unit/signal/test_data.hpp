@@ -1,10 +1,9 @@
 // Seeded test signals shared by the signal tests.
 #pragma once
 
+#include <Eigen/Core>
 #include <cstdint>
 #include <iostream>
-
-#include <Eigen/Core>
 
 #include "rig/signal/random.hpp"
 
