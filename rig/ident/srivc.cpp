@@ -141,6 +141,40 @@ Eigen::VectorXd initial_denominator(const Eigen::VectorXd& u, const Eigen::Vecto
   return best;
 }
 
+// Dead time minimising the output error: a coarse grid with a few SRIVC iterations per point,
+// golden section on the best bracket, then full convergence at the optimum.
+FixedDelayFit search_delay(const Eigen::VectorXd& u, const Eigen::VectorXd& y, double dt_s,
+                           ModelOrder order, const Eigen::VectorXd& a_start, FixedDelayFit best,
+                           const SrivcOptions& opt) {
+  SrivcOptions quick = opt;
+  quick.max_iterations = std::min(opt.max_iterations, 6);
+  quick.tolerance = std::max(opt.tolerance, 1e-5);
+  const int grid = std::max(3, std::min(12, static_cast<int>(opt.max_delay_s / dt_s) + 1));
+  const double step = opt.max_delay_s / (grid - 1);
+  int best_i = 0;
+  for (int i = 1; i < grid; ++i) {
+    FixedDelayFit f = srivc_fixed(u, y, dt_s, order, i * step, a_start, quick);
+    if (f.sse < best.sse) best = f, best_i = i;
+  }
+  double a = std::max(0.0, (best_i - 1) * step), b = std::min(opt.max_delay_s, (best_i + 1) * step);
+  const Eigen::VectorXd warm = best.tf.den;
+  auto eval = [&](double td) { return srivc_fixed(u, y, dt_s, order, td, warm, quick); };
+  double x1 = b - kGolden * (b - a), x2 = a + kGolden * (b - a);
+  FixedDelayFit f1 = eval(x1), f2 = eval(x2);
+  while (b - a > dt_s / 20.0) {
+    if (f1.sse <= f2.sse) {
+      b = x2, x2 = x1, f2 = f1, x1 = b - kGolden * (b - a), f1 = eval(x1);
+    } else {
+      a = x1, x1 = x2, f1 = f2, x2 = a + kGolden * (b - a), f2 = eval(x2);
+    }
+  }
+  for (const FixedDelayFit* f : {&f1, &f2})
+    if (f->sse < best.sse) best = *f;
+  const FixedDelayFit final_fit =
+      srivc_fixed(u, y, dt_s, order, best.tf.delay_s, best.tf.den, opt);
+  return final_fit.sse <= best.sse ? final_fit : best;
+}
+
 }  // namespace
 
 Eigen::MatrixXd output_sensitivities(const TransferFunction& tf_in, const Eigen::VectorXd& u,
@@ -179,30 +213,7 @@ SrivcResult estimate_srivc(const Eigen::VectorXd& u, const Eigen::VectorXd& y, d
   const double td0 = opt.delay_s.value_or(0.0);
   const Eigen::VectorXd a0 = initial_denominator(u, y, dt_s, order, td0, opt);
   FixedDelayFit best = srivc_fixed(u, y, dt_s, order, td0, a0, opt);
-  if (!opt.delay_s) {
-    // Grid over [0, max_delay], then golden section on the bracket (warm starts).
-    const int grid = std::max(3, std::min(16, static_cast<int>(opt.max_delay_s / dt_s) + 1));
-    const double step = opt.max_delay_s / (grid - 1);
-    int best_i = 0;
-    for (int i = 1; i < grid; ++i) {
-      FixedDelayFit f = srivc_fixed(u, y, dt_s, order, i * step, best.tf.den, opt);
-      if (f.sse < best.sse) best = f, best_i = i;
-    }
-    double a = std::max(0.0, (best_i - 1) * step), b = std::min(opt.max_delay_s, (best_i + 1) * step);
-    const Eigen::VectorXd warm = best.tf.den;
-    auto eval = [&](double td) { return srivc_fixed(u, y, dt_s, order, td, warm, opt); };
-    double x1 = b - kGolden * (b - a), x2 = a + kGolden * (b - a);
-    FixedDelayFit f1 = eval(x1), f2 = eval(x2);
-    while (b - a > dt_s / 50.0) {
-      if (f1.sse <= f2.sse) {
-        b = x2, x2 = x1, f2 = f1, x1 = b - kGolden * (b - a), f1 = eval(x1);
-      } else {
-        a = x1, x1 = x2, f1 = f2, x2 = a + kGolden * (b - a), f2 = eval(x2);
-      }
-    }
-    for (const FixedDelayFit* f : {&f1, &f2})
-      if (f->sse < best.sse) best = *f;
-  }
+  if (!opt.delay_s) best = search_delay(u, y, dt_s, order, a0, best, opt);
   SrivcResult res;
   res.model = best.tf;
   res.delay_s = best.tf.delay_s;

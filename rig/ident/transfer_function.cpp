@@ -4,6 +4,7 @@
 #include <limits>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 #include <Eigen/Eigenvalues>
 #include <unsupported/Eigen/MatrixFunctions>
@@ -126,21 +127,38 @@ Eigen::MatrixXd filtered_derivatives(const Eigen::VectorXd& den_in, const Eigen:
   const FohStep full = foh_step(a, bin, dt_s);
   const FohStep s1 = f > 0 ? foh_step(a, bin, f * dt_s) : full;
   const FohStep s2 = f > 0 ? foh_step(a, bin, (1.0 - f) * dt_s) : full;
-  const Eigen::RowVectorXd top = a.row(0);
-  Eigen::VectorXd x = Eigen::VectorXd::Zero(n), t(n);
+  // Plain loops over row-major copies: n <= ~8, so the per-sample cost is a few n^2
+  // multiply-adds and Eigen's dynamic-size overhead would dominate.
+  const auto rm = [](const Eigen::MatrixXd& m) {
+    return Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>(m);
+  };
+  const auto p_full = rm(full.phi), p1 = rm(s1.phi), p2 = rm(s2.phi);
+  std::vector<double> x(static_cast<size_t>(n), 0.0), t(static_cast<size_t>(n));
+  auto apply = [n](const auto& phi, const FohStep& st, const std::vector<double>& from,
+                   std::vector<double>& to, double v, double slope) {
+    for (Eigen::Index i = 0; i < n; ++i) {
+      double acc = st.ga(i) * v + st.gb(i) * slope;
+      for (Eigen::Index j = 0; j < n; ++j) acc += phi(i, j) * from[static_cast<size_t>(j)];
+      to[static_cast<size_t>(i)] = acc;
+    }
+  };
   for (Eigen::Index k = 0; k < N; ++k) {
     const double v0 = ud(k);
-    out(k, 0) = v0 + top.dot(x);  // p^n z = u - sum a_i p^i z
-    out.row(k).tail(n) = x.transpose();
+    double top = v0;  // p^n z = u - sum a_i p^i z
+    for (Eigen::Index i = 0; i < n; ++i) {
+      top += a(0, i) * x[static_cast<size_t>(i)];
+      out(k, i + 1) = x[static_cast<size_t>(i)];
+    }
+    out(k, 0) = top;
     const double v2 = ud(k + 1);
     if (f == 0.0) {
-      t.noalias() = full.phi * x + full.ga * v0 + full.gb * ((v2 - v0) / dt_s);
+      apply(p_full, full, x, t, v0, (v2 - v0) / dt_s);
       x.swap(t);
     } else {
       // The delayed knot inside the step: left value (0 before the input starts), right value.
       const double v1l = k - d - 1 < 0 ? 0.0 : u_at(k - d), v1 = u_at(k - d);
-      t.noalias() = s1.phi * x + s1.ga * v0 + s1.gb * ((v1l - v0) / (f * dt_s));
-      x.noalias() = s2.phi * t + s2.ga * v1 + s2.gb * ((v2 - v1) / ((1.0 - f) * dt_s));
+      apply(p1, s1, x, t, v0, (v1l - v0) / (f * dt_s));
+      apply(p2, s2, t, x, v1, (v2 - v1) / ((1.0 - f) * dt_s));
     }
   }
   return out;

@@ -1,0 +1,19 @@
+#pragma once
+
+#include <cstdint>
+
+namespace rig::ident::bench {
+
+struct McConfig {
+  int runs = 200;
+  std::uint64_t seed = 1;
+  double minutes = 10.0;
+  int lags = 512;
+};
+
+void noise_free_table();
+void thesis_513_table();
+void stornoway_mc(const McConfig& cfg);
+void rao_garnier_mc(const McConfig& cfg);
+
+}  // namespace rig::ident::bench
