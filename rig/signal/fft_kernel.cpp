@@ -14,16 +14,11 @@
 #include <mutex>
 #include <vector>
 
+#include "rig/signal/fftw_planner.hpp"
 #include "rig/signal/lag_kernels.hpp"
 
 namespace rig::signal::detail {
 namespace {
-
-// FFTW's planner is not thread-safe; fftw_execute on distinct plans is.
-std::mutex& planner_mutex() {
-  static std::mutex m;
-  return m;
-}
 
 struct FftwFree {
   void operator()(void* p) const { fftw_free(p); }
@@ -54,13 +49,13 @@ class RealFft {
  public:
   explicit RealFft(Eigen::Index m)
       : m_(m), x_(fftw_buffer<double>(m)), f_(fftw_buffer<fftw_complex>(m / 2 + 1)) {
-    std::lock_guard<std::mutex> lock(planner_mutex());
+    std::lock_guard<std::mutex> lock(fftw_planner_mutex());
     const int n = static_cast<int>(m);
     forward_ = fftw_plan_dft_r2c_1d(n, x_.get(), f_.get(), FFTW_ESTIMATE);
     inverse_ = fftw_plan_dft_c2r_1d(n, f_.get(), x_.get(), FFTW_ESTIMATE);
   }
   ~RealFft() {
-    std::lock_guard<std::mutex> lock(planner_mutex());
+    std::lock_guard<std::mutex> lock(fftw_planner_mutex());
     fftw_destroy_plan(forward_);
     fftw_destroy_plan(inverse_);
   }
@@ -80,6 +75,18 @@ class RealFft {
 };
 
 }  // namespace
+}  // namespace rig::signal::detail
+
+namespace rig::signal {
+
+std::mutex& fftw_planner_mutex() {
+  static std::mutex m;
+  return m;
+}
+
+}  // namespace rig::signal
+
+namespace rig::signal::detail {
 
 void fft_run(const double* a, const double* w, AnchorRun run, double* acc) {
   if (run.count <= 0) return;

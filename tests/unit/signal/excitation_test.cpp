@@ -6,12 +6,14 @@
 #include <cmath>
 #include <cstdint>
 #include <iostream>
+#include <mutex>
 #include <numbers>
 #include <stdexcept>
 #include <vector>
 
 #include "rig/signal/butterworth.hpp"
 #include "rig/signal/correlators.hpp"
+#include "rig/signal/fftw_planner.hpp"
 
 namespace rig::signal {
 namespace {
@@ -25,6 +27,7 @@ Eigen::VectorXd periodogram(const Eigen::VectorXd& x) {
   const int n = static_cast<int>(x.size());
   std::vector<double> in(x.data(), x.data() + n);
   std::vector<fftw_complex> out(static_cast<size_t>(n / 2 + 1));
+  std::lock_guard<std::mutex> lock(fftw_planner_mutex());
   fftw_plan plan = fftw_plan_dft_r2c_1d(n, in.data(), out.data(), FFTW_ESTIMATE);
   fftw_execute(plan);
   fftw_destroy_plan(plan);
