@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
+#include <string>
 
 #include "drivers/modbus/register_map.hpp"
 
@@ -45,6 +47,9 @@ drivers::LinkResult<std::unique_ptr<ModbusNode>> ModbusNode::open(const drivers:
   options.holding_count = map::kHoldingCount;
   options.input_count = map::kInputCount;
   options.unit = endpoint.unit;
+  // PLANTSIM_MODBUS_DEBUG=1 prints libmodbus's frame trace (stdout) for debugging a rig.
+  const char* debug = std::getenv("PLANTSIM_MODBUS_DEBUG");
+  options.debug = debug != nullptr && std::string(debug) == "1";
   auto server =
       endpoint.scheme == drivers::LinkScheme::kModbusRtu
           ? drivers::ModbusServer::open_rtu(endpoint.device, endpoint.baud, endpoint.parity,

@@ -125,6 +125,7 @@ std::string tests_bin_path(const std::string& name) {
 }
 
 int port_of_ready_line(const std::string& line) {
+  if (line.find("://") == std::string::npos) return -1;  // rtu:/socketcan: have no port
   const auto colon = line.rfind(':');
   const auto space = line.find(' ', colon);
   if (colon == std::string::npos || space == std::string::npos) return -1;
