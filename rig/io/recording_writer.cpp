@@ -1,0 +1,133 @@
+#include "rig/io/recording_writer.hpp"
+
+#include <fcntl.h>
+#include <unistd.h>
+
+#include <fmt/format.h>
+
+#include <cerrno>
+#include <cstring>
+#include <stdexcept>
+
+#include "rig/io/input_error.hpp"
+
+namespace rig::io {
+
+RecordingWriter::RecordingWriter(std::filesystem::path csv, std::vector<std::string> columns,
+                                 Sidecar sidecar, RecordingWriterOptions options)
+    : path_(std::move(csv)),
+      columns_(std::move(columns)),
+      sidecar_(std::move(sidecar)),
+      options_(options) {
+  if (columns_.empty()) throw std::invalid_argument("RecordingWriter: no columns");
+  if (options_.flush_period > std::chrono::seconds(1) ||
+      options_.flush_period <= std::chrono::milliseconds(0)) {
+    throw std::invalid_argument("RecordingWriter: flush_period must be in (0, 1 s]");
+  }
+  fd_ = ::open(path_.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+  if (fd_ < 0) {
+    throw InputError(path_.string(), 0, "", std::string("cannot create: ") + std::strerror(errno));
+  }
+  for (std::size_t i = 0; i < columns_.size(); ++i) {
+    buffer_ += (i ? "," : "") + columns_[i];
+  }
+  buffer_ += '\n';
+  if (options_.write_sidecar) {
+    sidecar_.raw["columns"] = columns_;
+    sidecar_.raw["complete"] = false;
+    write_sidecar(sidecar_path(path_), sidecar_);
+  }
+  {
+    std::lock_guard lock(mutex_);
+    flush_locked();
+  }
+  flusher_ = std::thread([this] { flusher_loop(); });
+}
+
+RecordingWriter::~RecordingWriter() {
+  try {
+    close();
+  } catch (...) {
+    // A destructor must not throw; the error was already reported to append()/flush()
+    // callers when it happened.
+  }
+}
+
+void RecordingWriter::append(std::span<const double> row) {
+  if (row.size() != columns_.size()) {
+    throw std::invalid_argument(fmt::format("{}: expected {} values per row, got {}",
+                                            path_.string(), columns_.size(), row.size()));
+  }
+  std::lock_guard lock(mutex_);
+  if (!error_.empty()) throw InputError(path_.string(), 0, "", error_);
+  if (fd_ < 0) throw std::logic_error(path_.string() + ": append after close");
+  for (std::size_t i = 0; i < row.size(); ++i) {
+    if (i) buffer_ += ',';
+    fmt::format_to(std::back_inserter(buffer_), "{:.{}g}", row[i], options_.significant_digits);
+  }
+  buffer_ += '\n';
+  ++rows_;
+  if (buffer_.size() > (1u << 16)) flush_locked();
+}
+
+void RecordingWriter::append(std::initializer_list<double> row) {
+  append(std::span<const double>(row.begin(), row.size()));
+}
+
+void RecordingWriter::flush() {
+  std::lock_guard lock(mutex_);
+  flush_locked();
+  if (!error_.empty()) throw InputError(path_.string(), 0, "", error_);
+}
+
+// The buffer always ends at a line end, so each write(2) hands over whole rows.
+void RecordingWriter::flush_locked() {
+  if (fd_ < 0 || buffer_.empty() || !error_.empty()) return;
+  std::size_t done = 0;
+  while (done < buffer_.size()) {
+    const ssize_t n = ::write(fd_, buffer_.data() + done, buffer_.size() - done);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) {
+      error_ = std::string("write failed: ") + std::strerror(errno);
+      return;
+    }
+    done += std::size_t(n);
+  }
+  buffer_.clear();
+  if (options_.sync_to_disk) ::fdatasync(fd_);
+}
+
+void RecordingWriter::flusher_loop() {
+  std::unique_lock lock(mutex_);
+  while (!stopping_) {
+    wake_.wait_for(lock, options_.flush_period);
+    flush_locked();
+  }
+}
+
+void RecordingWriter::close() {
+  {
+    std::lock_guard lock(mutex_);
+    if (fd_ < 0) return;
+    stopping_ = true;
+  }
+  wake_.notify_all();
+  if (flusher_.joinable()) flusher_.join();
+  std::lock_guard lock(mutex_);
+  flush_locked();
+  ::close(fd_);
+  fd_ = -1;
+  if (options_.write_sidecar) {
+    sidecar_.raw["rows"] = rows_;
+    sidecar_.raw["complete"] = error_.empty();
+    write_sidecar(sidecar_path(path_), sidecar_);
+  }
+  if (!error_.empty()) throw InputError(path_.string(), 0, "", error_);
+}
+
+std::size_t RecordingWriter::rows() const {
+  std::lock_guard lock(mutex_);
+  return rows_;
+}
+
+}  // namespace rig::io

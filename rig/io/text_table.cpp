@@ -1,0 +1,106 @@
+#include "rig/io/text_table.hpp"
+
+#include <charconv>
+#include <cmath>
+
+namespace rig::io::detail {
+namespace {
+
+bool is_blank(std::string_view s) {
+  return s.find_first_not_of(" \t\r\f\v") == std::string_view::npos;
+}
+
+std::string_view trim(std::string_view s) {
+  const auto first = s.find_first_not_of(" \t\r");
+  if (first == std::string_view::npos) return {};
+  const auto last = s.find_last_not_of(" \t\r");
+  s = s.substr(first, last - first + 1);
+  if (s.size() >= 2 && s.front() == '"' && s.back() == '"') s = s.substr(1, s.size() - 2);
+  return s;
+}
+
+}  // namespace
+
+SplitText split_lines(std::string_view text) {
+  SplitText out;
+  long number = 0;
+  std::size_t pos = 0;
+  std::optional<long> pending_blank;
+  while (pos < text.size()) {
+    ++number;
+    const std::size_t end = text.find('\n', pos);
+    const bool terminated = end != std::string_view::npos;
+    std::string_view line = text.substr(pos, terminated ? end - pos : std::string_view::npos);
+    pos = terminated ? end + 1 : text.size();
+    if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
+    if (is_blank(line)) {
+      if (!pending_blank) pending_blank = number;
+      continue;
+    }
+    if (!terminated) {
+      out.partial_line = number;  // the writer always ends a row with '\n'
+      break;
+    }
+    if (pending_blank && !out.lines.empty() && !out.blank_inside) out.blank_inside = pending_blank;
+    pending_blank.reset();
+    out.lines.push_back({line, number});
+  }
+  return out;
+}
+
+char detect_separator(std::string_view first_line) {
+  for (char c : {',', ';', '\t'}) {
+    if (first_line.find(c) != std::string_view::npos) {
+      // A tab next to spaces (the DaISy files) is plain whitespace.
+      if (c == '\t' && first_line.find(' ') != std::string_view::npos) return 0;
+      return c;
+    }
+  }
+  return 0;
+}
+
+std::vector<std::string_view> split_fields(std::string_view line, char separator,
+                                           bool strip_trailing) {
+  std::vector<std::string_view> fields;
+  if (separator == 0) {
+    std::size_t pos = 0;
+    while (true) {
+      pos = line.find_first_not_of(" \t\r", pos);
+      if (pos == std::string_view::npos) break;
+      const std::size_t end = line.find_first_of(" \t\r", pos);
+      fields.push_back(trim(line.substr(pos, end == std::string_view::npos ? end : end - pos)));
+      if (end == std::string_view::npos) break;
+      pos = end;
+    }
+    return fields;
+  }
+  std::string_view body = line;
+  const auto last = body.find_last_not_of(" \t\r");
+  if (last != std::string_view::npos) body = body.substr(0, last + 1);
+  if (strip_trailing && !body.empty() && body.back() == separator) body.remove_suffix(1);
+  std::size_t pos = 0;
+  while (true) {
+    const std::size_t end = body.find(separator, pos);
+    fields.push_back(trim(body.substr(pos, end == std::string_view::npos ? end : end - pos)));
+    if (end == std::string_view::npos) break;
+    pos = end + 1;
+  }
+  return fields;
+}
+
+CellStatus parse_cell(std::string_view field, double& value) {
+  if (field.empty()) return CellStatus::kEmpty;
+  if (field.front() == '+') field.remove_prefix(1);
+  const char* first = field.data();
+  const char* last = field.data() + field.size();
+  const auto [ptr, ec] = std::from_chars(first, last, value);
+  if (ptr != last || (ec != std::errc() && ec != std::errc::result_out_of_range)) {
+    return CellStatus::kNotNumber;
+  }
+  if (ec == std::errc::result_out_of_range || !std::isfinite(value)) {
+    return CellStatus::kNotFinite;
+  }
+  return CellStatus::kOk;
+}
+
+}  // namespace rig::io::detail
