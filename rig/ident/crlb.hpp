@@ -20,7 +20,8 @@ struct CramerRaoBound {
   DerivedFigures derived;          // second order: bounds on gain, fn, zeta (std fields)
 };
 
+// delay_known: Td is not estimated (its row and column are dropped; reported std 0).
 CramerRaoBound cramer_rao_bound(const TransferFunction& true_tf, const Eigen::VectorXd& u,
-                                double dt_s, double noise_variance);
+                                double dt_s, double noise_variance, bool delay_known = false);
 
 }  // namespace rig::ident

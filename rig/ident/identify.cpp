@@ -183,7 +183,7 @@ IdentifyResult identify(const Eigen::VectorXd& u_raw, const Eigen::VectorXd& y_r
   res.ryu = signal::cross_correlation(y, u, co);
   res.model_ryu = model_cross_correlation(res.model, res.ruu);
   if (opt.method == IdentMethod::kMmfm && opt.blocks >= 3 &&
-      u.size() / opt.blocks >= 8 * opt.correlator.lags) {
+      u.size() / opt.blocks >= 4 * opt.correlator.lags) {
     MmfmOptions fixed = opt.mmfm;
     fixed.scale_s = fit.settings.scale_s;
     block_std_errors(u, y, dt_s, res.order, opt, fixed, res);

@@ -129,7 +129,7 @@ MmfmResult estimate_mmfm(const signal::Correlation& ruu, const signal::Correlati
     const double span = (ryu.lag_s(ryu.size() - 1) - ryu.lag_s(0)) - td_hi;
     const double s_max = 0.5 * span / unit_hw;
     const double s_dom = dominant_time_scale_s(ryu) / unit_hw;
-    for (double f : {0.5, 0.7, 1.0, 1.4, 2.0})
+    for (double f : {0.1, 0.2, 0.35, 0.5, 0.7, 1.0, 1.4, 2.0})
       if (f * s_dom <= s_max && f * s_dom >= 2.0 * dt) scales.push_back(f * s_dom);
     scales.push_back(s_max);
   }

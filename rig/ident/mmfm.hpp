@@ -42,7 +42,7 @@ struct MmfmOptions {
   double max_delay_s = -1.0;          // search range upper end; < 0: automatic
   ModulatingFamily family = ModulatingFamily::kHermite;
   int functions = 8;
-  int centres = 5;                    // centres spread over the admissible lags
+  int centres = 5;                    // minimum centres (more are added so supports overlap)
   std::optional<double> scale_s;      // nullopt: scanned (scored by correlation fit)
   MmfmSolver solver = MmfmSolver::kLeastSquares;
   Normalisation normalisation = Normalisation::kMonicDen;

@@ -3,6 +3,7 @@
 #include <cmath>
 #include <stdexcept>
 #include <string>
+#include <utility>
 
 #include <Eigen/SVD>
 
@@ -34,26 +35,43 @@ struct Equations {
   Eigen::MatrixXd m;  // rows: equations, columns: scaled theta [a_n..a_0, b_m..b_0]
 };
 
+// Index range of the lags within centre +- half_width on c's lag axis.
+std::pair<Eigen::Index, Eigen::Index> support(const signal::Correlation& c, double centre_s,
+                                              double half_width_s) {
+  const double lo = (centre_s - half_width_s) / c.dt_s + static_cast<double>(c.zero_index);
+  const double hi = (centre_s + half_width_s) / c.dt_s + static_cast<double>(c.zero_index);
+  const Eigen::Index i0 = std::clamp<Eigen::Index>(static_cast<Eigen::Index>(std::floor(lo)), 0,
+                                                   c.size() - 1);
+  const Eigen::Index i1 = std::clamp<Eigen::Index>(static_cast<Eigen::Index>(std::ceil(hi)), 0,
+                                                   c.size() - 1);
+  return {i0, i1 - i0 + 1};
+}
+
 Equations build_equations(const signal::Correlation& ruu, const signal::Correlation& ryu,
                           ModelOrder order, double delay_s, const MmfmSettings& st) {
   const int n = order.n, m = order.m, p = n + m + 2, deriv = std::max(n, m);
   const Eigen::VectorXd tau_y = lag_axis(ryu), tau_u = lag_axis(ruu);
-  const int rows_per_centre = st.functions;
+  const double hw = support_half_width_s(order, st);
   Equations eq;
-  eq.m.resize(static_cast<Eigen::Index>(st.centres_s.size()) * rows_per_centre, p);
+  eq.m.resize(static_cast<Eigen::Index>(st.centres_s.size()) * st.functions, p);
   Eigen::Index row = 0;
   for (double c : st.centres_s) {
+    // Only the lags inside the support carry weight; the functions are ~0 elsewhere.
+    const auto [y0, ny] = support(ryu, c, hw);
+    const auto [u0, nu] = support(ruu, c - delay_s, hw);
+    const Eigen::VectorXd ty = tau_y.segment(y0, ny), tu = tau_u.segment(u0, nu);
+    const Eigen::VectorXd ry = ryu.r.segment(y0, ny), ru = ruu.r.segment(u0, nu);
     Eigen::MatrixXd hy, hu;
     if (st.family == ModulatingFamily::kHermite) {
-      hy = hermite_functions(tau_y, c, st.scale_s, st.functions + deriv);
-      hu = hermite_functions(tau_u, c - delay_s, st.scale_s, st.functions + deriv);
+      hy = hermite_functions(ty, c, st.scale_s, st.functions + deriv);
+      hu = hermite_functions(tu, c - delay_s, st.scale_s, st.functions + deriv);
     }
     for (int k = 0; k < st.functions; ++k, ++row) {
-      const Eigen::MatrixXd fy = function_columns(tau_y, c, st, k, deriv, &hy);
-      const Eigen::MatrixXd fu = function_columns(tau_u, c - delay_s, st, k, deriv, &hu);
-      // <phi, r> by the trapezoid rule (the functions vanish at the window ends).
-      const Eigen::VectorXd gy = fy.transpose() * ryu.r * ryu.dt_s;
-      const Eigen::VectorXd gu = fu.transpose() * ruu.r * ruu.dt_s;
+      const Eigen::MatrixXd fy = function_columns(ty, c, st, k, deriv, &hy);
+      const Eigen::MatrixXd fu = function_columns(tu, c - delay_s, st, k, deriv, &hu);
+      // <phi, r> by the trapezoid rule (the functions vanish at the support ends).
+      const Eigen::VectorXd gy = fy.transpose() * ry * ryu.dt_s;
+      const Eigen::VectorXd gu = fu.transpose() * ru * ruu.dt_s;
       // Weight each equation by its function's size, not by the data (rows where the
       // correlations vanish must stay small).
       const double w = 1.0 / (fy.colwise().norm().maxCoeff() * std::sqrt(ryu.dt_s));
@@ -103,6 +121,8 @@ std::vector<double> admissible_centres(const signal::Correlation& ruu,
     lo = std::max(lo, sig_lo);
     hi = std::min(hi, sig_hi);
   }
+  // At least `count` centres, and enough that neighbouring supports overlap by a third.
+  count = std::min(64, std::max(count, static_cast<int>(std::ceil(1.5 * (hi - lo) / hw)) + 1));
   std::vector<double> centres;
   for (int i = 0; i < count; ++i)
     centres.push_back(count == 1 ? 0.5 * (lo + hi) : lo + (hi - lo) * i / (count - 1.0));

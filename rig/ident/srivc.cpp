@@ -161,7 +161,7 @@ FixedDelayFit search_delay(const Eigen::VectorXd& u, const Eigen::VectorXd& y, d
   auto eval = [&](double td) { return srivc_fixed(u, y, dt_s, order, td, warm, quick); };
   double x1 = b - kGolden * (b - a), x2 = a + kGolden * (b - a);
   FixedDelayFit f1 = eval(x1), f2 = eval(x2);
-  while (b - a > dt_s / 20.0) {
+  while (b - a > dt_s / 100.0) {
     if (f1.sse <= f2.sse) {
       b = x2, x2 = x1, f2 = f1, x1 = b - kGolden * (b - a), f1 = eval(x1);
     } else {
