@@ -1,0 +1,60 @@
+// The generator-set plant behind the Plant interface: the GensetModel ODE integrated by CVODE
+// tick by tick, the fuel history buffer, rack backlash, firing ripple and the measurement
+// chain, with timed parameter changes applied exactly at their plant time.
+#pragma once
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "plantsim/plant/config.hpp"
+#include "plantsim/plant/measurement_chain.hpp"
+#include "plantsim/plant/model.hpp"
+#include "plantsim/plant/plant.hpp"
+
+namespace plantsim {
+
+class GensetPlant : public Plant {
+ public:
+  GensetPlant(const Params& params, std::vector<TimedChange> changes, std::uint64_t seed,
+              std::chrono::nanoseconds tick);
+
+  void set_bias_pct(double bias_pct) override { bias_pct_ = bias_pct; }
+  void step() override;
+  Measurement measure() const override { return last_; }
+  std::chrono::nanoseconds tick() const override { return tick_; }
+  std::uint64_t ticks() const override { return ticks_; }
+  double rated_power_w() const override { return model_.params()[P::kRatedKw] * 1e3; }
+
+  // Beyond the Plant interface (tests, benchmarks, linearisation checks).
+  double time_s() const { return solver_->time(); }
+  const Eigen::VectorXd& state() const { return solver_->state(); }
+  const Params& params() const { return model_.params(); }
+  double electrical_power_kw() const;  // true Pe, before the measurement chain
+  double rack_pu() const { return backlash_.rack_pu(); }
+  SolverStats solver_stats() const { return solver_->stats(); }
+  const std::string& last_error() const { return error_; }
+
+ private:
+  void apply(const TimedChange& change);
+  void reconfigure();
+  void update_measurement();
+
+  GensetModel model_;
+  std::chrono::nanoseconds tick_;
+  double dt_s_;
+  std::unique_ptr<FuelDelayLine> delay_;
+  std::unique_ptr<CvodeSolver> solver_;
+  Backlash backlash_;
+  FiringRipple ripple_;
+  MeasurementChain chain_;
+  std::vector<TimedChange> changes_;
+  std::size_t next_change_ = 0;
+  std::uint64_t ticks_ = 0;
+  double bias_pct_ = 0.0;
+  double ripple_pu_ = 0.0;
+  Measurement last_;
+  std::string error_;
+};
+
+}  // namespace plantsim

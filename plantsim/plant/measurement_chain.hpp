@@ -1,0 +1,31 @@
+// Measurement chain of the electrical power (DESIGN.md section 7). The transducer lag
+// Tt p' = Pe - p is a state of the ODE; everything after it acts per tick on the sample:
+//   y = gain (p + ripple) P_rated + drift + noise + A sin(2 pi f_pick t)     (kW)
+//   quantised to q kW, then optionally AC-coupled by the analogue RC high-pass s RC/(1 + s RC).
+// Drift is an Ornstein-Uhlenbeck process d_k = a d_{k-1} + sqrt(1 - a^2) sigma n_k,
+// a = exp(-dt/tau). All randomness comes from one seeded generator: same seed, same samples.
+#pragma once
+
+#include <cstdint>
+#include <random>
+
+#include "plantsim/plant/parameters.hpp"
+
+namespace plantsim {
+
+class MeasurementChain {
+ public:
+  MeasurementChain(std::uint64_t seed, double dt_s) : rng_(seed), dt_s_(dt_s) {}
+  // p_pu: transducer output; ripple_pu: firing ripple at the transducer output.
+  double sample_kw(const Params& p, double t_s, double p_pu, double ripple_pu);
+
+ private:
+  std::mt19937_64 rng_;
+  std::normal_distribution<double> normal_{0.0, 1.0};
+  double dt_s_;
+  double drift_kw_ = 0.0;
+  double ac_lowpass_kw_ = 0.0;
+  bool ac_started_ = false;
+};
+
+}  // namespace plantsim

@@ -1,0 +1,56 @@
+// The assembled plant ODE: governor, engine, alternator/grid and transducer lag in one state
+// vector for CVODE. Inputs that are piecewise constant per tick (bias) or come from the
+// history buffer (delayed fuel) are members set between solver calls.
+//
+// State layout: [Degov1 (6) | Engine (2) | Alternator (4) | transducer lag (1)].
+#pragma once
+
+#include <Eigen/Core>
+
+#include "plantsim/plant/alternator.hpp"
+#include "plantsim/plant/engine.hpp"
+#include "plantsim/plant/governor.hpp"
+#include "plantsim/solver/cvode_solver.hpp"
+
+namespace plantsim {
+
+class GensetModel : public OdeSystem {
+ public:
+  static constexpr int kGov = 0;
+  static constexpr int kEng = kGov + Degov1::kStates;
+  static constexpr int kAlt = kEng + Engine::kStates;
+  static constexpr int kMeas = kAlt + Alternator::kStates;
+  static constexpr int kSize = kMeas + 1;
+
+  explicit GensetModel(const Params& p) : p_(p), gov_(p_), eng_(p_), alt_(p_) {}
+  GensetModel(const GensetModel&) = delete;  // the blocks refer to p_
+  GensetModel& operator=(const GensetModel&) = delete;
+
+  // Steady state at op.power_kw; validates limits (ConfigError). Returns the rack position.
+  Eigen::VectorXd steady_state(double* rack0_pu);
+
+  int size() const override { return kSize; }
+  bool derivatives(double t, const double* x, double* dx) override;
+  // The right-hand side with explicit inputs (used by derivatives() and the linearisation).
+  void rhs(const double* x, double bias_pu, double fuel_delayed_pu, double* dx) const;
+
+  void set_bias_pu(double bias_pu) { bias_pu_ = bias_pu; }
+  void set_delay_line(const FuelDelayLine* line) { delay_ = line; }
+
+  double electrical_power_pu(const double* x) const { return alt_.electrical_power_pu(x + kAlt); }
+  double terminal_voltage_pu(const double* x) const { return alt_.terminal_voltage_pu(x + kAlt); }
+  std::complex<double> torque_to_measured_power(const double* x, std::complex<double> s) const;
+
+  const Params& params() const { return p_; }
+  Params& mutable_params() { return p_; }
+
+ private:
+  Params p_;
+  Degov1 gov_;
+  Engine eng_;
+  Alternator alt_;
+  double bias_pu_ = 0.0;
+  const FuelDelayLine* delay_ = nullptr;
+};
+
+}  // namespace plantsim
