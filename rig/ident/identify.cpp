@@ -75,8 +75,11 @@ std::vector<OrderScore> score_orders(const Eigen::VectorXd& u, const Eigen::Vect
       s.validation_fit_pct = fit_percent(y.tail(n_val), y_hat.tail(n_val));
       s.delay_s = f.model.delay_s;
       const int params = order.n + order.m + 1 + (opt.delay_s ? 0 : 1);
-      if (std::isfinite(s.validation_fit_pct) && f.model.is_stable())
+      if (std::isfinite(s.validation_fit_pct) && f.model.is_stable()) {
         s.score = s.validation_fit_pct - opt.penalty_pct_per_parameter * params;
+      } else {
+        s.fit_pct = s.validation_fit_pct = kNaN;  // unstable: the fits mean nothing
+      }
     } catch (const std::invalid_argument&) {
       // An order whose functions do not fit the window stays in the table, unscored.
     }

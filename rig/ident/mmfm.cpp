@@ -140,6 +140,14 @@ MmfmResult estimate_mmfm(const signal::Correlation& ruu, const signal::Correlati
     st.scale_s = s;
     st.centres_s = admissible_centres(ruu, ryu, options.order, td_lo, td_hi, st, options.centres);
     if (st.centres_s.empty()) continue;
+    for (int level = 1; level < options.scale_levels; ++level) {
+      MmfmSettings wide = st;
+      wide.scale_s = s * std::pow(3.0, level);
+      MmfmBand band{wide.scale_s, admissible_centres(ruu, ryu, options.order, td_lo, td_hi,
+                                                     wide, options.centres)};
+      if (band.centres_s.empty()) break;
+      st.extra_bands.push_back(std::move(band));
+    }
     Evaluator ev{ruu, ryu, options.order, st};
     MmfmResult r = search_delay(ev, td_lo, td_hi, dt);
     if (score_of(r) > best_score || best.equations == 0) best_score = score_of(r), best = r;

@@ -26,12 +26,20 @@ namespace rig::ident {
 enum class MmfmSolver { kLeastSquares, kTotalLeastSquares };
 const char* to_string(MmfmSolver solver);
 
+// A further time scale with its own centres: equations from functions of several widths
+// share one solve (narrow functions resolve fast modes, wide ones the slow modes and gain).
+struct MmfmBand {
+  double scale_s = 0.0;
+  std::vector<double> centres_s;
+};
+
 // One fixed configuration of the equation set.
 struct MmfmSettings {
   ModulatingFamily family = ModulatingFamily::kHermite;
   int functions = 8;              // modulating functions per centre
-  double scale_s = 0.1;           // Hermite S; polynomial: window length = 2 * half-width
+  double scale_s = 0.1;           // Hermite S; polynomial: window = centre +- 4 S
   std::vector<double> centres_s;  // lags of the function centres (in r_yu's lag axis)
+  std::vector<MmfmBand> extra_bands;  // further scales (none by default)
   MmfmSolver solver = MmfmSolver::kLeastSquares;
   Normalisation normalisation = Normalisation::kMonicDen;
 };
@@ -44,6 +52,7 @@ struct MmfmOptions {
   int functions = 8;
   int centres = 5;                    // minimum centres (more are added so supports overlap)
   std::optional<double> scale_s;      // nullopt: scanned (scored by correlation fit)
+  int scale_levels = 3;               // bands at S, 3 S, 9 S ... where they fit the window
   MmfmSolver solver = MmfmSolver::kLeastSquares;
   Normalisation normalisation = Normalisation::kMonicDen;
 };

@@ -12,12 +12,6 @@
 namespace rig::ident {
 namespace {
 
-Eigen::VectorXd lag_axis(const signal::Correlation& c) {
-  Eigen::VectorXd tau(c.size());
-  for (Eigen::Index i = 0; i < c.size(); ++i) tau(i) = c.lag_s(i);
-  return tau;
-}
-
 // Columns i = 0..deriv of (-1)^i S^i phi_k^(i) sampled on tau, for function k of the family.
 // Hermite: (-1)^i S^i phi_k^(i) = phi_{k+i}.
 Eigen::MatrixXd function_columns(const Eigen::VectorXd& tau, double centre_s,
@@ -47,38 +41,53 @@ std::pair<Eigen::Index, Eigen::Index> support(const signal::Correlation& c, doub
   return {i0, i1 - i0 + 1};
 }
 
-Equations build_equations(const signal::Correlation& ruu, const signal::Correlation& ryu,
-                          ModelOrder order, double delay_s, const MmfmSettings& st) {
-  const int n = order.n, m = order.m, p = n + m + 2, deriv = std::max(n, m);
-  const Eigen::VectorXd tau_y = lag_axis(ryu), tau_u = lag_axis(ruu);
-  const double hw = support_half_width_s(order, st);
-  Equations eq;
-  eq.m.resize(static_cast<Eigen::Index>(st.centres_s.size()) * st.functions, p);
-  Eigen::Index row = 0;
-  for (double c : st.centres_s) {
+// Rows for the functions of one band (scale band_s, its centres). Unknowns are scaled with
+// the primary S: a_i S^-i, so the band's columns carry (S / band_s)^i.
+void add_band_rows(const signal::Correlation& ruu, const signal::Correlation& ryu,
+                   ModelOrder order, double delay_s, const MmfmSettings& st, double band_s,
+                   const std::vector<double>& centres, Eigen::MatrixXd& m, Eigen::Index& row) {
+  const int n = order.n, mo = order.m, deriv = std::max(n, mo);
+  MmfmSettings band = st;
+  band.scale_s = band_s;
+  const double hw = support_half_width_s(order, band), ratio = st.scale_s / band_s;
+  for (double c : centres) {
     // Only the lags inside the support carry weight; the functions are ~0 elsewhere.
     const auto [y0, ny] = support(ryu, c, hw);
     const auto [u0, nu] = support(ruu, c - delay_s, hw);
-    const Eigen::VectorXd ty = tau_y.segment(y0, ny), tu = tau_u.segment(u0, nu);
+    Eigen::VectorXd ty(ny), tu(nu);
+    for (Eigen::Index i = 0; i < ny; ++i) ty(i) = ryu.lag_s(y0 + i);
+    for (Eigen::Index i = 0; i < nu; ++i) tu(i) = ruu.lag_s(u0 + i);
     const Eigen::VectorXd ry = ryu.r.segment(y0, ny), ru = ruu.r.segment(u0, nu);
     Eigen::MatrixXd hy, hu;
-    if (st.family == ModulatingFamily::kHermite) {
-      hy = hermite_functions(ty, c, st.scale_s, st.functions + deriv);
-      hu = hermite_functions(tu, c - delay_s, st.scale_s, st.functions + deriv);
+    if (band.family == ModulatingFamily::kHermite) {
+      hy = hermite_functions(ty, c, band_s, band.functions + deriv);
+      hu = hermite_functions(tu, c - delay_s, band_s, band.functions + deriv);
     }
-    for (int k = 0; k < st.functions; ++k, ++row) {
-      const Eigen::MatrixXd fy = function_columns(ty, c, st, k, deriv, &hy);
-      const Eigen::MatrixXd fu = function_columns(tu, c - delay_s, st, k, deriv, &hu);
+    for (int k = 0; k < band.functions; ++k, ++row) {
+      const Eigen::MatrixXd fy = function_columns(ty, c, band, k, deriv, &hy);
+      const Eigen::MatrixXd fu = function_columns(tu, c - delay_s, band, k, deriv, &hu);
       // <phi, r> by the trapezoid rule (the functions vanish at the support ends).
       const Eigen::VectorXd gy = fy.transpose() * ry * ryu.dt_s;
       const Eigen::VectorXd gu = fu.transpose() * ru * ruu.dt_s;
       // Weight each equation by its function's size, not by the data (rows where the
       // correlations vanish must stay small).
       const double w = 1.0 / (fy.colwise().norm().maxCoeff() * std::sqrt(ryu.dt_s));
-      for (int i = 0; i <= n; ++i) eq.m(row, n - i) = gy(i) * w;
-      for (int j = 0; j <= m; ++j) eq.m(row, n + 1 + m - j) = -gu(j) * w;
+      for (int i = 0; i <= n; ++i) m(row, n - i) = gy(i) * w * std::pow(ratio, i);
+      for (int j = 0; j <= mo; ++j) m(row, n + 1 + mo - j) = -gu(j) * w * std::pow(ratio, j);
     }
   }
+}
+
+Equations build_equations(const signal::Correlation& ruu, const signal::Correlation& ryu,
+                          ModelOrder order, double delay_s, const MmfmSettings& st) {
+  Eigen::Index rows = static_cast<Eigen::Index>(st.centres_s.size());
+  for (const MmfmBand& b : st.extra_bands) rows += static_cast<Eigen::Index>(b.centres_s.size());
+  Equations eq;
+  eq.m.resize(rows * st.functions, order.n + order.m + 2);
+  Eigen::Index row = 0;
+  add_band_rows(ruu, ryu, order, delay_s, st, st.scale_s, st.centres_s, eq.m, row);
+  for (const MmfmBand& b : st.extra_bands)
+    add_band_rows(ruu, ryu, order, delay_s, st, b.scale_s, b.centres_s, eq.m, row);
   return eq;
 }
 

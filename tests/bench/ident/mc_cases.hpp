@@ -15,5 +15,6 @@ void noise_free_table();
 void thesis_513_table();
 void stornoway_mc(const McConfig& cfg);
 void rao_garnier_mc(const McConfig& cfg);
+void order_tables(const McConfig& cfg);
 
 }  // namespace rig::ident::bench

@@ -1,5 +1,5 @@
 // Monte Carlo and thesis-reproduction tables for the identification methods.
-//   bench_ident_mc --case stornoway|rao|thesis513|noisefree|all --runs N --seed S
+//   bench_ident_mc --case stornoway|rao|thesis513|noisefree|orders|all --runs N --seed S
 //                  [--minutes M] [--lags L]
 // Every table prints the seed; run r uses seed + r.
 #include <cstdio>
@@ -30,5 +30,6 @@ int main(int argc, char** argv) {
   if (which == "thesis513" || which == "all") rig::ident::bench::thesis_513_table();
   if (which == "stornoway" || which == "all") rig::ident::bench::stornoway_mc(cfg);
   if (which == "rao" || which == "all") rig::ident::bench::rao_garnier_mc(cfg);
+  if (which == "orders" || which == "all") rig::ident::bench::order_tables(cfg);
   return 0;
 }
