@@ -1,5 +1,7 @@
 #include "rig/ident/quality.hpp"
 
+// rig_ident does not link libfmt; the header-only build keeps the messages readable.
+#define FMT_HEADER_ONLY
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -144,3 +146,142 @@ void check_coupled_pairs(double dt_s, const QualityOptions& o, QualityReport& re
 }
 
 }  // namespace
+
+namespace {
+
+// The checks that need the correlations; skipped after no_response (nothing to judge).
+void check_response(const Correlations& c, const QualityOptions& o, QualityReport& rep) {
+  const Index z = c.ryu.zero_index, n = c.ryu.size(), p = n - 1 - z;
+  const double scale = std::sqrt(c.ruu(0) * c.ryy(0));
+  const double sigma = bartlett_sigma(c, n - 1);
+  const VectorXd rho = scale > 0.0 ? VectorXd(c.ryu.r / scale) : VectorXd::Zero(n);
+  const double peak_sigma = rho.cwiseAbs().maxCoeff() / sigma;
+  rep.figures.emplace_back("peak_sigma", peak_sigma);
+  if (!(peak_sigma >= o.significance_sigma)) {
+    add(rep, "no_response", Severity::kFatal,
+        fmt::format("No significant cross-correlation between input and output (peak {:.1f} "
+                    "standard deviations, {:.0f} needed): the output does not respond to the "
+                    "excitation; check that the excitation is connected and that the input and "
+                    "output columns are the right channels.",
+                    peak_sigma, o.significance_sigma),
+        peak_sigma, o.significance_sigma);
+    return;
+  }
+  const VectorXd h = impulse_response(c, o.regularisation);
+  const double acausal = h.head(z).squaredNorm() / h.squaredNorm();
+  rep.figures.emplace_back("acausal_fraction", acausal);
+  if (acausal > o.acausal_warning) {
+    add(rep, "acausal", acausal > o.acausal_fatal ? Severity::kFatal : Severity::kWarning,
+        fmt::format("{:.0f} % of the impulse response lies at negative lags (the output moves "
+                    "before the input): the input and output channels are probably swapped, or "
+                    "their time stamps are skewed.",
+                    100.0 * acausal),
+        acausal, o.acausal_warning);
+    if (acausal > o.acausal_fatal) return;
+  }
+  // Undecayed: |r_yu| over the last tenth of the positive lags against its peak.
+  const Index tail_n = std::max<Index>(3, p / 10);
+  const double pos_peak = rho.tail(p + 1).cwiseAbs().maxCoeff();
+  const double tail = rho.tail(tail_n).cwiseAbs().maxCoeff();
+  rep.figures.emplace_back("tail_ratio", tail / pos_peak);
+  if (tail / pos_peak > o.undecayed_ratio && tail > 3.0 * sigma) {
+    add(rep, "undecayed", Severity::kWarning,
+        fmt::format("The cross-correlation is still at {:.0f} % of its peak at the end of the "
+                    "lag window ({:.3g} s): lengthen the window (--lags), remove drift from the "
+                    "recording, or check that both channels have the same AC coupling.",
+                    100.0 * tail / pos_peak, c.ryu.lag_s(n - 1)),
+        tail / pos_peak, o.undecayed_ratio);
+  }
+  // Sag: the step response s = cumulative sum of h over lags >= 0, its last quarter's mean
+  // against its largest excursion. A type-0 plant settles near its peak; an output that is
+  // AC coupled alone returns towards zero (a slow opposite-sign tail in h).
+  VectorXd s(p + 1);
+  double acc = 0.0;
+  for (Index k = 0; k <= p; ++k) s[k] = (acc += h[z + k]);
+  Index ipk = 0;
+  s.cwiseAbs().maxCoeff(&ipk);
+  const Index q = std::max<Index>(2, (p + 1) / 4);
+  const double step_tail = s.tail(q).mean() * (s[ipk] >= 0 ? 1.0 : -1.0) / std::abs(s[ipk]);
+  rep.figures.emplace_back("step_tail_ratio", step_tail);
+  if (step_tail < o.sag_ratio && !rep.find("coupling_mismatch")) {
+    add(rep, "coupling_mismatch", Severity::kWarning,
+        fmt::format("The step response derived from the data falls back to {:.0f} % of its "
+                    "peak within the window (a slow opposite-sign tail): the output is probably "
+                    "AC coupled without a matched network on the input{}.",
+                    100.0 * step_tail,
+                    o.coupling_rc_s ? fmt::format(" (declared RC {:.3g} s)", *o.coupling_rc_s) : ""),
+        step_tail, o.sag_ratio);
+  }
+}
+
+void check_excitation(const Correlations& c, const QualityOptions& o, QualityReport& rep) {
+  const double lines = excited_lines(c, c.ryu.size() - 1);
+  const int unknowns = o.order.n + o.order.m + 1 + (o.delay_estimated ? 1 : 0);
+  const int required = (unknowns + 1) / 2;
+  rep.figures.emplace_back("excited_lines", lines);
+  rep.figures.emplace_back("required_lines", required);
+  if (lines >= required) return;
+  add(rep, "not_persistently_exciting", Severity::kFatal,
+      fmt::format("The input excites only about {:.1f} independent frequencies, but a {}/{} model{} "
+                  "needs at least {}: use a broadband excitation (filtered noise or PRBS) or ask "
+                  "for a lower order.",
+                  lines, o.order.n, o.order.m, o.delay_estimated ? " with a delay" : "", required),
+      lines, required);
+}
+
+}  // namespace
+
+const char* to_string(Severity severity) {
+  return severity == Severity::kFatal ? "fatal" : "warning";
+}
+
+bool QualityReport::has_fatal() const {
+  return std::any_of(flags.begin(), flags.end(),
+                     [](const QualityFlag& f) { return f.severity == Severity::kFatal; });
+}
+
+const QualityFlag* QualityReport::find(const std::string& name) const {
+  for (const QualityFlag& f : flags) {
+    if (f.name == name) return &f;
+  }
+  return nullptr;
+}
+
+double fitted_coupling_rc_s(const VectorXd& raw, const VectorXd& coupled, double dt_s) {
+  const Index n = std::min(raw.size(), coupled.size());
+  double num = 0.0, den = 0.0;
+  for (Index k = 1; k < n; ++k) {
+    num += coupled[k - 1] * (coupled[k] - (raw[k] - raw[k - 1]));
+    den += coupled[k - 1] * coupled[k - 1];
+  }
+  const double a = den > 0.0 ? num / den : std::numeric_limits<double>::quiet_NaN();
+  if (!(a > 0.0 && a < 1.0)) return std::numeric_limits<double>::quiet_NaN();
+  return -dt_s / std::log(a);
+}
+
+QualityReport check_quality(const VectorXd& u, const VectorXd& y, double dt_s,
+                            const QualityOptions& options) {
+  if (u.size() != y.size()) {
+    throw std::invalid_argument(fmt::format("quality: input has {} samples, output {}", u.size(), y.size()));
+  }
+  if (!(dt_s > 0.0)) throw std::invalid_argument("quality: dt_s must be > 0");
+  signal::CorrelatorOptions opt = options.correlator;
+  opt.dt_s = dt_s;
+  if (u.size() < 4 * opt.lags) {
+    throw std::invalid_argument(fmt::format("quality: {} samples are too few for a lag window of "
+                                            "{} (need at least {})", u.size(), opt.lags, 4 * opt.lags));
+  }
+  QualityReport rep;
+  check_sampling(dt_s, options, rep);
+  check_clipping(u, "input", options, rep);
+  check_clipping(y, "output", options, rep);
+  check_coupled_pairs(dt_s, options, rep);
+  const VectorXd uc = u.array() - u.mean();
+  const VectorXd yc = y.array() - y.mean();
+  const Correlations c = correlate(uc, yc, opt);
+  if (c.ruu(0) > 0.0) check_excitation(c, options, rep);
+  check_response(c, options, rep);
+  return rep;
+}
+
+}  // namespace rig::ident
