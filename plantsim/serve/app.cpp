@@ -53,8 +53,9 @@ void print_summary(const Running& r) {
                                  std::chrono::duration<double>(s.plant_time).count(), s.ticks);
   if (r.clock) {
     const auto j = r.clock->jitter();
-    line += fmt::format("; tick jitter p50 {:.0f} us p99 {:.0f} us max {:.0f} us", j.p50_us,
-                        j.p99_us, j.max_us);
+    line += fmt::format("; tick jitter p50 {:.0f} us p99 {:.0f} us max {:.0f} us ({})", j.p50_us,
+                        j.p99_us, j.max_us,
+                        r.clock->realtime_priority() ? "SCHED_FIFO" : "normal priority");
   }
   if (r.modbus) {
     const auto c = r.modbus->counters();

@@ -47,13 +47,17 @@ class RealtimeClock {
   void start();
   void stop();  // joins; idempotent
   JitterStats jitter() const;
+  // Whether the tick thread got SCHED_FIFO (valid once the first tick has been taken).
+  bool realtime_priority() const { return realtime_priority_; }
 
  private:
   void run();
+  void raise_priority();
 
   Governor& governor_;
   std::thread thread_;
   std::atomic<bool> stop_{false};
+  std::atomic<bool> realtime_priority_{false};
   mutable std::mutex mu_;
   JitterHistogram histogram_;
 };
