@@ -2,12 +2,18 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cmath>
 
 namespace plantsim {
 namespace {
 
 constexpr double kMaxDeadTimeS = 1.0;  // engine.dead_time_s upper bound; sizes the history
+
+// The exact bias path needs the setpoint path to be linear: no deadband on e, no rate limit.
+bool linear_setpoint_path(const Params& p) {
+  return p[P::kGovDeadband] == 0.0 && p[P::kGovRate] == 0.0;
+}
 
 SolverOptions solver_options(const Params& p) {
   SolverOptions o;
@@ -32,7 +38,10 @@ GensetPlant::GensetPlant(const Params& params, std::vector<TimedChange> changes,
   const Eigen::VectorXd x0 = model_.steady_state(&rack0);
   delay_ = std::make_unique<FuelDelayLine>(dt_s_, kMaxDeadTimeS + dt_s_, rack0);
   backlash_.reset(rack0);
+  actuator_pu_ = rack0;
+  transducer_.reset(x0[GensetModel::kMeas]);
   model_.set_delay_line(delay_.get());
+  model_.set_split_bias_path(linear_setpoint_path(params));
   solver_ = std::make_unique<CvodeSolver>(model_, 0.0, x0, solver_options(params));
   reconfigure();
   while (next_change_ < changes_.size() && changes_[next_change_].time_s <= 0.0) {
@@ -42,6 +51,7 @@ GensetPlant::GensetPlant(const Params& params, std::vector<TimedChange> changes,
 }
 
 void GensetPlant::reconfigure() {
+  bias_path_.configure(model_.params(), dt_s_);
   const Eigen::VectorXd& x = solver_->state();
   ripple_.configure(model_.params(), [&](std::complex<double> s) {
     return model_.torque_to_measured_power(x.data(), s);
@@ -50,32 +60,88 @@ void GensetPlant::reconfigure() {
 
 void GensetPlant::apply(const TimedChange& change) {
   model_.mutable_params().set(change.param, change.value, "--fault '" + change.text + "'");
+  Eigen::VectorXd x = solver_->state();
+  const bool split = linear_setpoint_path(model_.params());
+  if (model_.split_bias_path() && !split) {
+    // Superposition undone: the ODE's governor states become the sums, the bias enters e.
+    x.segment<BiasPath::kStates>(GensetModel::kGov + Degov1::kZ1) += bias_path_.state();
+    bias_path_.reset();
+  }
+  model_.set_split_bias_path(split);
   reconfigure();
   // A parameter step makes the right-hand side discontinuous: restart the multistep history.
-  solver_->reinit(solver_->time(), solver_->state());
+  solver_->reinit(solver_->time(), x);
+}
+
+void GensetPlant::advance_bias_path(double duration_s) {
+  if (!model_.split_bias_path()) return;
+  const double r_pu = model_.params()[P::kGovR] * bias_pct_ / 100.0;
+  if (std::abs(duration_s - dt_s_) < 1e-12) {
+    bias_path_.advance(r_pu);
+  } else {
+    bias_path_.advance(r_pu, duration_s);
+  }
+}
+
+// Look-ahead: the plant after the rack sees the governor only through the fuel dead time, so
+// CVODE may step on as far as the rack history reaches, t_k + Td, and ticks are interpolated
+// from its dense output. With the exact bias path (BiasPath) a bias change never touches the
+// ODE. Without it (deadband or rate limit set) the bias enters e: while the bias keeps
+// changing every tick is a stop time; after a quiet spell CVODE may look ahead again, and a
+// change then rolls it back to the tick (reinit from the interpolated state).
+bool GensetPlant::advance_solver(double t_now, double t_end) {
+  const double bias_pu = bias_pct_ / 100.0;
+  const bool split = model_.split_bias_path();
+  if (!split && bias_pu != model_.bias_pu()) {
+    // CVODE may end a stop-time step a round-off beyond the tick; that is not look-ahead.
+    if (solver_->internal_time() > t_now + 1e-9) {
+      solver_->reinit(solver_->time(), solver_->state());
+    }
+    quiet_ticks_ = 0;
+  } else if (quiet_ticks_ < kLookAheadAfterTicks) {
+    ++quiet_ticks_;
+  }
+  model_.set_bias_pu(bias_pu);
+  const bool look_ahead = split || quiet_ticks_ >= kLookAheadAfterTicks;
+  const double horizon = look_ahead ? t_now + dead_time_s(model_.params()) : t_end;
+  double t_seg = t_now;
+  try {
+    while (next_change_ < changes_.size() && changes_[next_change_].time_s <= t_end) {
+      const double t_change = std::max(changes_[next_change_].time_s, t_now);
+      solver_->advance_to(t_change, horizon);
+      advance_bias_path(t_change - t_seg);
+      t_seg = t_change;
+      apply(changes_[next_change_++]);
+    }
+    solver_->advance_to(t_end, horizon);
+  } catch (const SolverError& e) {
+    error_ = e.what();
+    return false;
+  }
+  advance_bias_path(t_end - t_seg);
+  return true;
 }
 
 void GensetPlant::step() {
   if (last_.fault) return;  // a failed solver stays failed; the servers report it
-  const double t_end = static_cast<double>(ticks_ + 1) * dt_s_;
-  model_.set_bias_pu(bias_pct_ / 100.0);
-  try {
-    while (next_change_ < changes_.size() && changes_[next_change_].time_s <= t_end) {
-      solver_->advance_to(changes_[next_change_].time_s);
-      apply(changes_[next_change_++]);
-    }
-    solver_->advance_to(t_end);
-  } catch (const SolverError& e) {
-    error_ = e.what();
+  const double t_now = static_cast<double>(ticks_) * dt_s_;
+  const double t_end = t_now + dt_s_;
+  if (!advance_solver(t_now, t_end)) {
     last_.fault = true;
     return;
   }
   ++ticks_;
   const Eigen::VectorXd& x = solver_->state();
   const Params& p = model_.params();
-  const double rack = backlash_.update(Degov1::actuator_pu(x.data() + GensetModel::kGov),
-                                       p[P::kGovBacklash]);
+  const double xf_ode = Degov1::actuator_pu(x.data() + GensetModel::kGov);
+  actuator_pu_ = xf_ode;
+  if (model_.split_bias_path()) {
+    bias_path_.clamp_integrator(xf_ode, p[P::kGovTmin], p[P::kGovTmax]);
+    actuator_pu_ = xf_ode + bias_path_.integrator_pu();
+  }
+  const double rack = backlash_.update(actuator_pu_, p[P::kGovBacklash]);
   delay_->push(t_end, rack);
+  transducer_.advance(model_.electrical_power_pu(x.data()), dt_s_, p[P::kMeasLag]);
   const double w = 1.0 + x[GensetModel::kAlt + Alternator::kDw];
   ripple_pu_ = ripple_.advance(dt_s_, w, Engine::torque_pu(x.data() + GensetModel::kEng));
   update_measurement();
@@ -91,7 +157,7 @@ void GensetPlant::update_measurement() {
   const double t = static_cast<double>(ticks_) * dt_s_;
   const double dw = x[GensetModel::kAlt + Alternator::kDw];
   last_.time_s = t;
-  last_.power_w = 1e3 * chain_.sample_kw(p, t, x[GensetModel::kMeas], ripple_pu_);
+  last_.power_w = 1e3 * chain_.sample_kw(p, t, transducer_.value(), ripple_pu_);
   last_.speed_rpm = p[P::kEngRpm] * (1.0 + dw);
   last_.freq_hz = p[P::kFreqHz] * (1.0 + dw);
   last_.voltage_v = model_.terminal_voltage_pu(x.data()) * p[P::kRatedVoltageV];

@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "plantsim/plant/bias_path.hpp"
 #include "plantsim/plant/config.hpp"
 #include "plantsim/plant/measurement_chain.hpp"
 #include "plantsim/plant/model.hpp"
@@ -32,6 +33,8 @@ class GensetPlant : public Plant {
   const Params& params() const { return model_.params(); }
   double electrical_power_kw() const;  // true Pe, before the measurement chain
   double rack_pu() const { return backlash_.rack_pu(); }
+  double actuator_pu() const { return actuator_pu_; }  // before backlash
+  bool split_bias_path() const { return model_.split_bias_path(); }
   SolverStats solver_stats() const { return solver_->stats(); }
   const std::string& last_error() const { return error_; }
 
@@ -39,6 +42,8 @@ class GensetPlant : public Plant {
   void apply(const TimedChange& change);
   void reconfigure();
   void update_measurement();
+  void advance_bias_path(double duration_s);
+  bool advance_solver(double t_now, double t_end);
 
   GensetModel model_;
   std::chrono::nanoseconds tick_;
@@ -46,11 +51,17 @@ class GensetPlant : public Plant {
   std::unique_ptr<FuelDelayLine> delay_;
   std::unique_ptr<CvodeSolver> solver_;
   Backlash backlash_;
+  BiasPath bias_path_;
+  TransducerLag transducer_;
+  double actuator_pu_ = 0.0;
   FiringRipple ripple_;
   MeasurementChain chain_;
   std::vector<TimedChange> changes_;
   std::size_t next_change_ = 0;
   std::uint64_t ticks_ = 0;
+  // Ticks without a bias change before CVODE may step beyond the next tick.
+  static constexpr int kLookAheadAfterTicks = 20;
+  int quiet_ticks_ = 0;
   double bias_pct_ = 0.0;
   double ripple_pu_ = 0.0;
   Measurement last_;

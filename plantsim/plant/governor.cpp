@@ -22,8 +22,8 @@ double Degov1::error_pu(const double* x, double bias_pu, double dw_pu) const {
   return std::abs(e) <= db ? 0.0 : e - std::copysign(db, e);
 }
 
-void Degov1::derivatives(const double* x, double pe_pu, double dw_pu, double bias_pu,
-                         double* dx) const {
+void Degov1::derivatives(const double* x, double pe_pu, double dw_pu, double bias_pu, double* dx,
+                         bool limit_integrator) const {
   const double te = p_[P::kGovTe], t1 = p_[P::kGovT1], t2 = p_[P::kGovT2], t3 = p_[P::kGovT3];
   const double k = p_[P::kGovK], t4 = p_[P::kGovT4], t5 = p_[P::kGovT5], t6 = p_[P::kGovT6];
   dx[kPeFilt] = (pe_pu - x[kPeFilt]) / te;
@@ -40,7 +40,9 @@ void Degov1::derivatives(const double* x, double pe_pu, double dw_pu, double bia
   if (rate > 0.0) v = std::clamp(v, -rate, rate);
   // Non-windup integrator: stop at a limit while the input pushes further out.
   const double xf = x[kXf];
-  if ((xf >= p_[P::kGovTmax] && v > 0.0) || (xf <= p_[P::kGovTmin] && v < 0.0)) v = 0.0;
+  const bool pushing_out =
+      (xf >= p_[P::kGovTmax] && v > 0.0) || (xf <= p_[P::kGovTmin] && v < 0.0);
+  if (limit_integrator && pushing_out) v = 0.0;
   dx[kXf] = v;
 }
 

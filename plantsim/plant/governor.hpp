@@ -28,7 +28,10 @@ class Degov1 {
   double pref_pu() const;  // R P0, from op.power_kw
   // Summing-junction error with the deadband applied.
   double error_pu(const double* x, double bias_pu, double dw_pu) const;
-  void derivatives(const double* x, double pe_pu, double dw_pu, double bias_pu, double* dx) const;
+  // limit_integrator = false leaves xf a plain integrator (when the limits act elsewhere,
+  // see BiasPath).
+  void derivatives(const double* x, double pe_pu, double dw_pu, double bias_pu, double* dx,
+                   bool limit_integrator = true) const;
   static double actuator_pu(const double* x) { return x[kXf]; }
 
  private:

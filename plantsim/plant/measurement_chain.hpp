@@ -6,12 +6,32 @@
 // a = exp(-dt/tau). All randomness comes from one seeded generator: same seed, same samples.
 #pragma once
 
+#include <cmath>
 #include <cstdint>
 #include <random>
 
 #include "plantsim/plant/parameters.hpp"
 
 namespace plantsim {
+
+// Power transducer lag Tt y' = u - y, advanced per tick exactly for an input that is linear
+// between the tick samples (first-order hold), a = exp(-h/Tt):
+//   y_{k+1} = a y_k + (1 - a) u_k + (u_{k+1} - u_k) (1 - (Tt/h)(1 - a)).
+class TransducerLag {
+ public:
+  void reset(double value) { y_ = u_ = value; }
+  double advance(double u_next, double h_s, double lag_s) {
+    const double a = std::exp(-h_s / lag_s);
+    y_ = a * y_ + (1.0 - a) * u_ + (u_next - u_) * (1.0 - lag_s / h_s * (1.0 - a));
+    u_ = u_next;
+    return y_;
+  }
+  double value() const { return y_; }
+
+ private:
+  double y_ = 0.0;
+  double u_ = 0.0;
+};
 
 class MeasurementChain {
  public:

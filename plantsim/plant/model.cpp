@@ -29,10 +29,11 @@ Eigen::VectorXd GensetModel::steady_state(double* rack0_pu) {
   return x;
 }
 
-void GensetModel::rhs(const double* x, double bias_pu, double fuel_delayed_pu, double* dx) const {
+void GensetModel::rhs(const double* x, double bias_pu, double fuel_delayed_pu, double* dx,
+                      bool limit_integrator) const {
   const double pe = alt_.electrical_power_pu(x + kAlt);
   const double dw = x[kAlt + Alternator::kDw];
-  gov_.derivatives(x + kGov, pe, dw, bias_pu, dx + kGov);
+  gov_.derivatives(x + kGov, pe, dw, bias_pu, dx + kGov, limit_integrator);
   eng_.derivatives(x + kEng, fuel_delayed_pu, dx + kEng);
   alt_.derivatives(x + kAlt, Engine::torque_pu(x + kEng), dx + kAlt);
   dx[kMeas] = (pe - x[kMeas]) / p_[P::kMeasLag];
@@ -40,7 +41,14 @@ void GensetModel::rhs(const double* x, double bias_pu, double fuel_delayed_pu, d
 
 bool GensetModel::derivatives(double t, const double* x, double* dx) {
   const double fuel = delay_->at(t - dead_time_s(p_));
-  rhs(x, bias_pu_, fuel, dx);
+  if (split_) {
+    rhs(x, 0.0, fuel, dx, false);
+  } else {
+    rhs(x, bias_pu_, fuel, dx);
+  }
+  // The transducer lag runs per tick on the output (TransducerLag); its ODE state is frozen
+  // here so that CVODE's step size is set by the plant, not by a 3 ms filter on its output.
+  dx[kMeas] = 0.0;
   for (int i = 0; i < kSize; ++i) {
     if (!std::isfinite(dx[i])) return false;
   }

@@ -32,9 +32,15 @@ class GensetModel : public OdeSystem {
   int size() const override { return kSize; }
   bool derivatives(double t, const double* x, double* dx) override;
   // The right-hand side with explicit inputs (used by derivatives() and the linearisation).
-  void rhs(const double* x, double bias_pu, double fuel_delayed_pu, double* dx) const;
+  void rhs(const double* x, double bias_pu, double fuel_delayed_pu, double* dx,
+           bool limit_integrator = true) const;
 
+  // Split: the bias path is solved outside (BiasPath) and the ODE's governor sees only the
+  // state feedback, with its integrator unlimited. Otherwise the bias enters e directly.
+  void set_split_bias_path(bool split) { split_ = split; }
+  bool split_bias_path() const { return split_; }
   void set_bias_pu(double bias_pu) { bias_pu_ = bias_pu; }
+  double bias_pu() const { return bias_pu_; }
   void set_delay_line(const FuelDelayLine* line) { delay_ = line; }
 
   double electrical_power_pu(const double* x) const { return alt_.electrical_power_pu(x + kAlt); }
@@ -50,6 +56,7 @@ class GensetModel : public OdeSystem {
   Engine eng_;
   Alternator alt_;
   double bias_pu_ = 0.0;
+  bool split_ = false;
   const FuelDelayLine* delay_ = nullptr;
 };
 

@@ -7,6 +7,7 @@
 #include <sunlinsol/sunlinsol_dense.h>
 #include <sunmatrix/sunmatrix_dense.h>
 
+#include <algorithm>
 #include <cstdlib>
 
 namespace plantsim {
@@ -95,15 +96,25 @@ void CvodeSolver::set_max_step(double max_step_s) {
   check_retval(CVodeSetMaxStep(impl_->mem, max_step_s), "CVodeSetMaxStep");
 }
 
-void CvodeSolver::advance_to(double t_out) {
+void CvodeSolver::advance_to(double t_out, double t_stop) {
   if (t_out <= t_) return;
-  // The stop time keeps CVODE from integrating past t_out with inputs that may change there;
-  // CVODE clears it once reached, so it is set on every call.
-  check_retval(CVodeSetStopTime(impl_->mem, t_out), "CVodeSetStopTime");
   realtype t_reached = t_;
-  check_retval(CVode(impl_->mem, t_out, impl_->y, &t_reached, CV_NORMAL), "CVode");
+  if (t_out <= internal_time()) {
+    check_retval(CVodeGetDky(impl_->mem, t_out, 0, impl_->y), "CVodeGetDky");
+    t_reached = t_out;
+  } else {
+    // CVODE clears the stop time once it is reached, so it is set on every call.
+    check_retval(CVodeSetStopTime(impl_->mem, std::max(t_stop, t_out)), "CVodeSetStopTime");
+    check_retval(CVode(impl_->mem, t_out, impl_->y, &t_reached, CV_NORMAL), "CVode");
+  }
   t_ = t_reached;
   x_ = Eigen::Map<const Eigen::VectorXd>(N_VGetArrayPointer(impl_->y), x_.size());
+}
+
+double CvodeSolver::internal_time() const {
+  realtype tn = t_;
+  check_retval(CVodeGetCurrentTime(impl_->mem, &tn), "CVodeGetCurrentTime");
+  return tn;
 }
 
 void CvodeSolver::reinit(double t, const Eigen::VectorXd& x) {

@@ -57,7 +57,13 @@ class CvodeSolver {
   CvodeSolver& operator=(const CvodeSolver&) = delete;
 
   // Integrates to t_out without stepping past it (the inputs may change there).
-  void advance_to(double t_out);
+  void advance_to(double t_out) { advance_to(t_out, t_out); }
+  // Returns the solution at t_out, letting CVODE step on as far as t_stop (>= t_out) while
+  // the inputs are known to stay as they are; the state at t_out is then interpolated from
+  // CVODE's Nordsieck history (CVodeGetDky) and later outputs up to the internal time need no
+  // new steps. reinit() rolls back from such a look-ahead when an input changes after all.
+  void advance_to(double t_out, double t_stop);
+  double internal_time() const;  // CVODE's own time, >= time()
   // Restart from (t, x): after a discontinuous state change.
   void reinit(double t, const Eigen::VectorXd& x);
   void set_max_step(double max_step_s);
