@@ -160,6 +160,7 @@ MmfmResult estimate_mmfm(const signal::Correlation& ruu, const signal::Correlati
     best.delay_std_s = delay_std_from_curvature(ev, best);
   }
   best.parameters = parameter_table(best.model, best.covariance, best.delay_std_s);
+  if (options.refine) return refine_correlation_output_error(ruu, ryu, best, !options.delay_s);
   return best;
 }
 

@@ -53,6 +53,10 @@ struct MmfmOptions {
   int centres = 5;                    // minimum centres (more are added so supports overlap)
   std::optional<double> scale_s;      // nullopt: scanned (scored by correlation fit)
   int scale_levels = 3;               // bands at S, 3 S, 9 S ... where they fit the window
+  // After the MMFM solve, minimise |r_yu - h * r_uu|^2 over the coefficients and Td by
+  // Levenberg-Marquardt from the MMFM estimate (a correlation-domain output error; the thesis'
+  // own model check turned into the criterion). Off: the plain MMFM estimate.
+  bool refine = false;
   MmfmSolver solver = MmfmSolver::kLeastSquares;
   Normalisation normalisation = Normalisation::kMonicDen;
 };
@@ -69,6 +73,7 @@ struct MmfmResult {
   double correlation_fit_pct = 0.0;    // model r_yu (= h * r_uu) against measured r_yu
   int equations = 0;
   MmfmSettings settings;               // what was used (scale, centres, solver, ...)
+  bool refined = false;                // correlation-domain output-error refinement applied
   signal::Correlation model_ryu;       // the model's cross-correlation, for plots
 };
 
@@ -85,6 +90,13 @@ MmfmResult mmfm_solve(const signal::Correlation& ruu, const signal::Correlation&
 // fractional-sample resolution), standard errors and derived figures.
 MmfmResult estimate_mmfm(const signal::Correlation& ruu, const signal::Correlation& ryu,
                          const MmfmOptions& options);
+
+// Levenberg-Marquardt on V = |r_yu - h * r_uu|^2 over theta = [a_{n-1}..a_0, b_m..b_0, Td]
+// (monic; Td fixed when delay_free is false) from start.model. Covariance s^2 (J^T J)^-1 with
+// s^2 = V / (L - p): it treats correlation errors as white, so it is optimistic.
+MmfmResult refine_correlation_output_error(const signal::Correlation& ruu,
+                                           const signal::Correlation& ryu,
+                                           const MmfmResult& start, bool delay_free);
 
 // The model's cross-correlation r_yu_hat = h * r_uu on r_uu's lag axis (lsim of r_uu).
 signal::Correlation model_cross_correlation(const TransferFunction& tf,

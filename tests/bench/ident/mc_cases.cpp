@@ -2,6 +2,8 @@
 #include "tests/bench/ident/mc_cases.hpp"
 
 #include <chrono>
+#include <functional>
+#include <utility>
 #include <cmath>
 #include <cstdio>
 #include <string>
@@ -29,16 +31,27 @@ struct Series {
   }
 };
 
-void print_row(const char* name, double truth, double crlb_std, const std::vector<double>& m,
-               const std::vector<double>& m_se, const std::vector<double>& s,
-               const std::vector<double>& s_se, double scale, const char* unit) {
-  const auto a = stats_of(m), b = stats_of(s);
-  const double ea = crlb_std * crlb_std / (a.std * a.std), eb = crlb_std * crlb_std / (b.std * b.std);
-  std::printf("  %-6s %9.5f | MMFM bias %7.3f%s std %7.3f%s se %7.3f%s | SRIVC bias %7.3f%s "
-              "std %7.3f%s se %7.3f%s | CRLB %7.3f%s | eff %5.2f %5.2f\n",
-              name, truth, (a.mean - truth) * scale, unit, a.std * scale, unit,
-              stats_of(m_se).mean * scale, unit, (b.mean - truth) * scale, unit, b.std * scale,
-              unit, stats_of(s_se).mean * scale, unit, crlb_std * scale, unit, ea, eb);
+void print_row(const char* name, double truth, double crlb_std,
+               const std::vector<std::pair<const std::vector<double>*, const std::vector<double>*>>& cols,
+               double scale, const char* unit) {
+  std::printf("  %-6s %8.5f |", name, truth);
+  for (const auto& [v, se] : cols) {
+    const auto a = stats_of(*v);
+    std::printf(" bias %7.3f std %6.3f se %6.3f eff %4.2f |", (a.mean - truth) * scale,
+                a.std * scale, stats_of(*se).mean * scale, crlb_std * crlb_std / (a.std * a.std));
+  }
+  std::printf(" CRLB %6.3f %s\n", crlb_std * scale, unit);
+}
+
+void run_series(Series& s, const char* label, int r, const std::function<void(Series&)>& f) {
+  const auto t0 = Clock::now();
+  try {
+    f(s);
+  } catch (const std::exception& e) {
+    ++s.failures;
+    std::printf("  run %d %s failed: %s\n", r, label, e.what());
+  }
+  s.seconds += std::chrono::duration<double>(Clock::now() - t0).count();
 }
 
 }  // namespace
@@ -49,52 +62,51 @@ void stornoway_mc(const McConfig& cfg) {
   std::printf("\n== Stornoway-like loop e^{-0.06s}/(0.07s^2+0.19s+11.05): Gaussian 4 Hz, "
               "100 Hz, SNR 0 dB, %.1f min, %d runs, seed %llu (run r: seed+r), lags %d ==\n",
               cfg.minutes, cfg.runs, static_cast<unsigned long long>(cfg.seed), cfg.lags);
-  Series mm, sr;
+  Series mm, oe, sr;
   std::vector<double> crlb_fn, crlb_zeta, crlb_gain, crlb_td;
   for (int r = 0; r < cfg.runs; ++r) {
     const auto rec = experiments::stornoway_record(cfg.seed + r, cfg.minutes);
     IdentifyOptions io;
     io.order = ModelOrder{2, 0};
     io.correlator.lags = cfg.lags;
-    auto t0 = Clock::now();
-    try {
+    run_series(mm, "MMFM", r, [&](Series& s) {
       const IdentifyResult res = identify(rec.u, rec.y, rec.dt_s, io);
-      mm.add(res.derived, res.delay_s, res.delay_std_s);
-    } catch (const std::exception& e) {
-      ++mm.failures;
-      std::printf("  run %d MMFM failed: %s\n", r, e.what());
-    }
-    auto t1 = Clock::now();
-    SrivcOptions so;
-    so.order = {2, 0};
-    so.max_delay_s = 0.3;
-    try {
+      s.add(res.derived, res.delay_s, res.delay_std_s);
+    });
+    run_series(oe, "MMFM+OE", r, [&](Series& s) {
+      IdentifyOptions o2 = io;
+      o2.mmfm.refine = true;
+      const IdentifyResult res = identify(rec.u, rec.y, rec.dt_s, o2);
+      s.add(res.derived, res.delay_s, res.delay_std_s);
+    });
+    run_series(sr, "SRIVC", r, [&](Series& s) {
+      SrivcOptions so;
+      so.order = {2, 0};
+      so.max_delay_s = 0.3;
       const SrivcResult res = estimate_srivc(rec.u.array() - rec.u.mean(),
                                              rec.y.array() - rec.y.mean(), rec.dt_s, so);
-      sr.add(res.derived, res.delay_s, res.delay_std_s);
-    } catch (const std::exception& e) {
-      ++sr.failures;
-      std::printf("  run %d SRIVC failed: %s\n", r, e.what());
-    }
-    auto t2 = Clock::now();
-    mm.seconds += std::chrono::duration<double>(t1 - t0).count();
-    sr.seconds += std::chrono::duration<double>(t2 - t1).count();
+      s.add(res.derived, res.delay_s, res.delay_std_s);
+    });
     const CramerRaoBound b = cramer_rao_bound(tf, rec.u, rec.dt_s, rec.noise_variance);
     crlb_fn.push_back(b.derived.fn_hz_std), crlb_zeta.push_back(b.derived.zeta_std);
     crlb_gain.push_back(b.derived.gain_std), crlb_td.push_back(b.std_dev(b.std_dev.size() - 1));
   }
-  std::printf("  (bias and std in %% of truth, Td in ms; se = mean reported std error; "
-              "eff = CRLB var / MC var)\n");
-  print_row("fn_hz", truth.fn_hz, stats_of(crlb_fn).mean, mm.fn, mm.fn_se, sr.fn, sr.fn_se,
-            100.0 / truth.fn_hz, "%");
-  print_row("zeta", truth.zeta, stats_of(crlb_zeta).mean, mm.zeta, mm.zeta_se, sr.zeta,
-            sr.zeta_se, 100.0 / truth.zeta, "%");
-  print_row("gain", truth.gain, stats_of(crlb_gain).mean, mm.gain, mm.gain_se, sr.gain,
-            sr.gain_se, 100.0 / truth.gain, "%");
-  print_row("Td_s", tf.delay_s, stats_of(crlb_td).mean, mm.td, mm.td_se, sr.td, sr.td_se,
-            1000.0, "ms");
-  std::printf("  failures: MMFM %d, SRIVC %d; time per run: MMFM %.3f s, SRIVC %.3f s\n",
-              mm.failures, sr.failures, mm.seconds / cfg.runs, sr.seconds / cfg.runs);
+  std::printf("  columns: MMFM | MMFM+OE (correlation-domain refinement) | SRIVC. bias, std, "
+              "se (mean reported std error) in %% of truth (Td in ms); eff = CRLB var / MC var\n");
+  print_row("fn_hz", truth.fn_hz, stats_of(crlb_fn).mean,
+            {{&mm.fn, &mm.fn_se}, {&oe.fn, &oe.fn_se}, {&sr.fn, &sr.fn_se}}, 100.0 / truth.fn_hz, "%");
+  print_row("zeta", truth.zeta, stats_of(crlb_zeta).mean,
+            {{&mm.zeta, &mm.zeta_se}, {&oe.zeta, &oe.zeta_se}, {&sr.zeta, &sr.zeta_se}},
+            100.0 / truth.zeta, "%");
+  print_row("gain", truth.gain, stats_of(crlb_gain).mean,
+            {{&mm.gain, &mm.gain_se}, {&oe.gain, &oe.gain_se}, {&sr.gain, &sr.gain_se}},
+            100.0 / truth.gain, "%");
+  print_row("Td_s", tf.delay_s, stats_of(crlb_td).mean,
+            {{&mm.td, &mm.td_se}, {&oe.td, &oe.td_se}, {&sr.td, &sr.td_se}}, 1000.0, "ms");
+  std::printf("  failures: MMFM %d, MMFM+OE %d, SRIVC %d; time per run: MMFM %.3f s, "
+              "MMFM+OE %.3f s, SRIVC %.3f s\n", mm.failures, oe.failures, sr.failures,
+              mm.seconds / cfg.runs, oe.seconds / cfg.runs, sr.seconds / cfg.runs);
+  std::fflush(stdout);
 }
 
 void rao_garnier_mc(const McConfig& cfg) {
@@ -106,9 +118,14 @@ void rao_garnier_mc(const McConfig& cfg) {
               static_cast<long long>(samples), cfg.runs, static_cast<unsigned long long>(cfg.seed));
   const Eigen::VectorXd truth = pack_parameters(tf).tail(6);  // a3..a0, b1, b0
   const char* names[] = {"a3", "a2", "a1", "a0", "b1", "b0"};
-  std::vector<std::vector<double>> mm(6), sr(6);
+  std::vector<std::vector<double>> est[3];
+  for (auto& e : est) e.resize(6);
   Eigen::VectorXd crlb_var = Eigen::VectorXd::Zero(6);
-  int mm_fail = 0, sr_fail = 0;
+  int fails[3] = {0, 0, 0};
+  auto keep = [&](int k, const TransferFunction& model) {
+    const Eigen::VectorXd th = pack_parameters(monic(model));
+    for (int i = 0; i < 6; ++i) est[k][i].push_back(th(i + 1));
+  };
   for (int r = 0; r < cfg.runs; ++r) {
     const auto rec = experiments::rao_garnier_record(cfg.seed + r, samples);
     IdentifyOptions io;
@@ -117,37 +134,41 @@ void rao_garnier_mc(const McConfig& cfg) {
     io.correlator.lags = 2048;
     io.correlator.zero_index = 400;
     io.blocks = 0;
-    try {
-      const Eigen::VectorXd th = pack_parameters(monic(identify(rec.u, rec.y, rec.dt_s, io).model));
-      for (int i = 0; i < 6; ++i) mm[i].push_back(th(i + 1));
-    } catch (const std::exception& e) {
-      ++mm_fail;
-      std::printf("  run %d MMFM failed: %s\n", r, e.what());
+    for (int k = 0; k < 2; ++k) {
+      io.mmfm.refine = k == 1;
+      try {
+        keep(k, identify(rec.u, rec.y, rec.dt_s, io).model);
+      } catch (const std::exception& e) {
+        ++fails[k];
+        std::printf("  run %d MMFM failed: %s\n", r, e.what());
+      }
     }
     SrivcOptions so;
     so.order = {4, 1};
     so.delay_s = 0.0;
     try {
-      const SrivcResult res = estimate_srivc(rec.u.array() - rec.u.mean(),
-                                             rec.y.array() - rec.y.mean(), rec.dt_s, so);
-      const Eigen::VectorXd th = pack_parameters(res.model);
-      for (int i = 0; i < 6; ++i) sr[i].push_back(th(i + 1));
+      keep(2, estimate_srivc(rec.u.array() - rec.u.mean(), rec.y.array() - rec.y.mean(),
+                             rec.dt_s, so).model);
     } catch (const std::exception& e) {
-      ++sr_fail;
+      ++fails[2];
       std::printf("  run %d SRIVC failed: %s\n", r, e.what());
     }
     const CramerRaoBound b = cramer_rao_bound(tf, rec.u, rec.dt_s, rec.noise_variance, true);
     crlb_var += b.covariance.diagonal().head(6) / cfg.runs;
   }
-  std::printf("  %-4s %10s | %12s %12s | %12s %12s | %10s\n", "par", "true", "MMFM mean",
-              "MMFM std", "SRIVC mean", "SRIVC std", "CRLB std");
+  std::printf("  %-4s %9s | %10s %9s | %10s %9s | %10s %9s | %9s\n", "par", "true", "MMFM mean",
+              "std", "+OE mean", "std", "SRIVC mean", "std", "CRLB std");
   for (int i = 0; i < 6; ++i) {
-    const auto a = stats_of(mm[i]), b = stats_of(sr[i]);
-    std::printf("  %-4s %10.3f | %12.3f %12.3f | %12.3f %12.3f | %10.3f\n", names[i], truth(i),
-                a.mean, a.std, b.mean, b.std, std::sqrt(crlb_var(i)));
+    std::printf("  %-4s %9.2f |", names[i], truth(i));
+    for (auto& e : est) {
+      const auto a = stats_of(e[i]);
+      std::printf(" %10.2f %9.2f |", a.mean, a.std);
+    }
+    std::printf(" %9.2f\n", std::sqrt(crlb_var(i)));
   }
-  std::printf("  (CRLB for Td known, mean over runs; failures MMFM %d, SRIVC %d)\n", mm_fail,
-              sr_fail);
+  std::printf("  (CRLB for Td known, mean over runs; failures MMFM %d, MMFM+OE %d, SRIVC %d)\n",
+              fails[0], fails[1], fails[2]);
+  std::fflush(stdout);
 }
 
 namespace {
