@@ -200,7 +200,9 @@ IdentifyResult identify(const Eigen::VectorXd& u_raw, const Eigen::VectorXd& y_r
   if (opt.method == IdentMethod::kMmfm)
     s << ", " << to_string(fit.settings.family) << " functions " << fit.settings.functions
       << " x " << fit.settings.centres_s.size() << " centres, S " << fit.settings.scale_s
-      << " s, " << to_string(fit.settings.solver);
+      << " s, " << fit.settings.extra_bands.size() + 1 << " scale bands, "
+      << to_string(fit.settings.solver)
+      << (opt.mmfm.refine ? ", refined by correlation-domain output error" : "");
   s << ", std errors " << res.std_error_method;
   res.settings = s.str();
   return res;
