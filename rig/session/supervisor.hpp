@@ -1,0 +1,187 @@
+// Power supervisor (DESIGN.md section 8): the only path from an excitation value to the bias
+// written to the governor. Pure and deterministic: one call per tick, no clock, no I/O.
+//
+//   Supervisor sup(config);            // throws SupervisorConfigError on a bad config
+//   sup.start();
+//   while (!sup.done()) {
+//     auto out = sup.tick(latest_read, excitation.next());   // LinkResult<Sample> or Sample
+//     link.write(out.bias_pct);        // out.heartbeat is advanced every tick
+//     if (write failed) sup.trip(TripCause::kLinkError, err.message());
+//     if (excitation finished) sup.finish();
+//   }
+//
+// Layers applied every tick, in order:
+//  (3) trip: a sample with |P - P0| > band, a stale counter (unchanged for stale_ticks
+//      consecutive ticks), a missing sample, a link error, non-finite power or a governor
+//      status fault trips in the same tick: the request is ignored from that tick on (scale
+//      0) and the bias moves from its last value to the baseline at ramp_rate_pct_per_s.
+//      The first cause is latched with a one-line text.
+//  (2) back-off: the envelope of d = P - P0 predicts how far the plant will swing even if
+//      the excitation stopped now. A lightly damped mode at w_r = 2 pi resonance_hz holding
+//      d_f and d_f' (d low-passed at 3 resonance_hz by a 2nd-order Butterworth, so that
+//      noise and 50 Hz pick-up do not reach the derivative) swings freely with amplitude
+//          A = sqrt(d_f^2 + (d_f' / w_r)^2),
+//      which rises as soon as energy enters the mode, a quarter cycle before |d| peaks. With
+//      a peak hold that releases with envelope_release_s,
+//          env_k = max(|d_k|, A_k, env_{k-1} exp(-dt / envelope_release_s)),
+//      the target scale is  s* = clamp((zero_fraction - env/band) /
+//                                      (zero_fraction - start_fraction), 0, 1);
+//      A second, statistical cap corrects an amplitude plan built on a wrong gain: with
+//      exponentially weighted (rms_time_constant_s) variance of d, mean squares of the
+//      applied excitation u and of the request r, and the noise variance s_n^2 of the
+//      steady-state check, the observed gain is g^2 = (var d - s_n^2)^+ / ms(u) and the
+//      predicted peak at scale s is peak_to_rms sqrt(s^2 g^2 ms(r) + s_n^2); keeping it
+//      within plan_fraction of the band gives
+//          s_cap = sqrt((plan_fraction band / peak_to_rms)^2 - s_n^2) / (g sqrt(ms(r))).
+//      g^2 and ms(r) are held at their recent maxima (released with statistics_hold_s), so
+//      that a lull in a random excitation, or a stretch of it away from the resonance, does
+//      not open the cap just before the next burst. g^2 enters the hold only once the
+//      response stands out of the noise (var d > 2 s_n^2): set noise_rms_kw, or the cap
+//      learns noise / tiny excitation at the soft start and stays needlessly low.
+//      The applied scale drops to min(s*, s_cap) at once and rises at most
+//      recover_rate_per_s (which is also the soft start from 0 after start()).
+//  (4) clamp, always last: |bias| <= clamp_pct whatever the request or estimate (a NaN
+//      request counts as 0).
+//  (5) heartbeat: incremented every tick; the link writes it with the bias.
+// Layer (1), the amplitude plan, is rig/session/amplitude_plan.hpp.
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <stdexcept>
+#include <string>
+
+#include "drivers/governor_link.hpp"
+
+namespace rig::session {
+
+enum class SupervisorState { kIdle, kRunning, kBackingOff, kTripped, kRampingDown, kDone };
+enum class TripCause {
+  kNone,
+  kOutOfBand,       // |P - P0| above the band
+  kStaleSample,     // sample counter not advancing
+  kMissingSample,   // no sample this tick (timeout)
+  kNotFinite,       // NaN/Inf power
+  kLinkError,       // link read/write failure
+  kGovernorStatus,  // status: heartbeat lost, plant fault, or not running
+  kExternal,        // tripped by the caller (operator abort, sequencer fault)
+};
+const char* to_string(SupervisorState state);
+const char* to_string(TripCause cause);
+
+struct SupervisorConfigError : std::invalid_argument {
+  using std::invalid_argument::invalid_argument;
+};
+
+struct BackoffConfig {
+  double start_fraction = 0.6;       // envelope / band where the scale starts to fall
+  double zero_fraction = 0.9;        // envelope / band where the scale reaches 0
+  double envelope_release_s = 2.0;   // peak-hold decay time constant
+  double recover_rate_per_s = 0.1;   // fastest rise of the scale (soft start: 10 s to 1)
+  double resonance_hz = 2.0;         // dominant mode (prior or pilot); 0: no derivative term
+  double plan_fraction = 0.8;        // statistical cap: predicted peak within this of the band
+  double peak_to_rms = 4.0;          // response peak / rms: 4 for Gaussian noise excitation,
+                                     // ~2 for a sine (sqrt 2 and margin); 0 disables the cap
+  double rms_time_constant_s = 2.0;  // averaging of the variance and mean squares
+  double statistics_hold_s = 20.0;   // release of the held request mean square
+};
+
+// The back-off envelope of (2) above, one sample at a time.
+class DeviationEnvelope {
+ public:
+  DeviationEnvelope(const BackoffConfig& config, double dt_s);
+  double update(double deviation_kw);  // returns env_k
+  double value() const { return envelope_kw_; }
+  void reset();
+
+ private:
+  double dt_s_, decay_, w_r_;
+  double b0_ = 0, b1_ = 0, b2_ = 0, a1_ = 0, a2_ = 0;  // low-pass biquad
+  double x1_ = 0, x2_ = 0, y1_ = 0, y2_ = 0;
+  bool primed_ = false;  // filter state initialised from the first sample
+  double envelope_kw_ = 0.0;
+};
+
+struct SupervisorConfig {
+  double p0_kw = 0.0;                // steady power from the steady-state check
+  double band_fraction = 0.03;       // |P - P0| <= band_fraction P0; > 0.03 needs the override
+  bool band_override = false;        // explicit permission for a band above 3 % (recorded)
+  double baseline_bias_pct = 0.0;    // bias before excitation, the ramp's target
+  double clamp_pct = 2.0;            // |bias| <= clamp_pct, independent of every estimate
+  double ramp_rate_pct_per_s = 1.0;  // return to baseline after a trip or at the end
+  double dt_s = 0.01;                // tick period
+  double noise_rms_kw = 0.0;         // power noise without excitation (steady-state check)
+  int stale_ticks = 3;               // unchanged counter for this many consecutive ticks trips
+  std::uint16_t trip_status_mask = drivers::kHeartbeatLost | drivers::kPlantFault;
+  std::uint16_t required_status_mask = drivers::kRunning;  // a cleared bit here trips
+  BackoffConfig backoff;
+
+  double band_kw() const { return band_fraction * p0_kw; }
+};
+
+// Throws SupervisorConfigError with a one-line message naming the field.
+void validate(const SupervisorConfig& config);
+
+struct TripRecord {
+  TripCause cause = TripCause::kNone;
+  std::string text;        // one line, e.g. "power 3612.0 kW is 112.0 kW from P0 (band 105.0)"
+  std::uint64_t tick = 0;  // tick index at which it tripped
+};
+
+struct SupervisorOutput {
+  double bias_pct = 0.0;        // write this
+  double excitation_pct = 0.0;  // bias_pct - baseline: the excitation as applied (record as u)
+  double scale = 0.0;           // back-off factor applied to the request, [0, 1]
+  SupervisorState state = SupervisorState::kIdle;
+  TripCause trip_cause = TripCause::kNone;  // latched
+  std::uint16_t heartbeat = 0;
+  double deviation_kw = 0.0;  // P - P0 of the judged sample (NaN when none)
+  double envelope_kw = 0.0;   // back-off envelope
+};
+
+class Supervisor {
+ public:
+  explicit Supervisor(const SupervisorConfig& config);
+
+  void start();   // idle -> running; the scale soft-starts from 0
+  void finish();  // running/backing_off -> ramping_down (excitation over)
+  // Latches a trip from outside the tick (write failure, operator abort); the next tick
+  // ramps. A second trip keeps the first cause.
+  void trip(TripCause cause, std::string text);
+
+  SupervisorOutput tick(const drivers::Sample& sample, double request_pct);
+  SupervisorOutput tick(const drivers::LinkResult<drivers::Sample>& read, double request_pct);
+  SupervisorOutput tick_missing(double request_pct);  // no sample this tick
+
+  SupervisorState state() const { return state_; }
+  bool done() const { return state_ == SupervisorState::kDone; }
+  bool tripped() const { return trip_.has_value(); }
+  const std::optional<TripRecord>& trip_record() const { return trip_; }
+  const SupervisorConfig& config() const { return config_; }
+  bool band_overridden() const { return config_.band_fraction > 0.03; }
+  std::uint64_t ticks() const { return tick_; }
+
+ private:
+  bool active() const;
+  void judge(const drivers::Sample& sample);
+  SupervisorOutput command(double request_pct, double deviation_kw);
+  double ramp_toward_baseline() const;
+
+  SupervisorConfig config_;
+  SupervisorState state_ = SupervisorState::kIdle;
+  std::optional<TripRecord> trip_;
+  std::uint64_t tick_ = 0;
+  std::uint16_t heartbeat_ = 0;
+  std::optional<std::uint16_t> last_counter_;
+  int unchanged_ticks_ = 0;
+  double statistical_cap() const;
+  void update_statistics(double deviation_kw);
+
+  DeviationEnvelope envelope_;
+  double scale_ = 0.0;
+  double mean_d_ = 0.0, ms_d_ = 0.0, ms_u_ = 0.0, ms_r_ = 0.0;  // exponentially weighted
+  double ms_r_held_ = 0.0, g2_held_ = 0.0;
+  double last_bias_pct_ = 0.0;
+};
+
+}  // namespace rig::session
