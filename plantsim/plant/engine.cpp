@@ -87,12 +87,9 @@ void FiringRipple::set_weights(const Params& p) {
 double FiringRipple::advance(double dt_s, double w_pu, double torque_pu) {
   phase_rad_ = std::fmod(phase_rad_ + cycle_rad_s_ * w_pu * dt_s, 2.0 * std::numbers::pi);
   if (!enabled_) return 0.0;
-  const std::complex<double> rot = std::polar(1.0, phase_rad_);
-  std::complex<double> e_h = rot;
   double sum = 0.0;
-  for (const auto& g : gains_) {
-    sum += (g * e_h).real();
-    e_h *= rot;
+  for (int h : active_) {
+    sum += (gains_[static_cast<std::size_t>(h - 1)] * std::polar(1.0, h * phase_rad_)).real();
   }
   return torque_pu * sum;
 }

@@ -66,6 +66,7 @@ class FiringRipple {
   void set_weights(const Params& p);
   std::vector<std::complex<double>> weights_;  // A_h (h = 1..)
   std::vector<std::complex<double>> gains_;    // A_h G(j h W)
+  std::vector<int> active_;                    // harmonics with a non-negligible gain
   double cycle_rad_s_ = 0.0;
   double phase_rad_ = 0.0;
   bool enabled_ = false;
@@ -78,6 +79,11 @@ void FiringRipple::configure(const Params& p, G&& g_of_s) {
   for (std::size_t i = 0; i < weights_.size(); ++i) {
     const double w = static_cast<double>(i + 1) * cycle_rad_s_;
     gains_[i] = weights_[i] * g_of_s(std::complex<double>(0.0, w));
+  }
+  // Balanced cylinders cancel every harmonic but the firing ones; skip the cancelled ones.
+  active_.clear();
+  for (std::size_t i = 0; i < gains_.size(); ++i) {
+    if (std::abs(weights_[i]) > 1e-12) active_.push_back(static_cast<int>(i) + 1);
   }
 }
 

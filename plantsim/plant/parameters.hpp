@@ -75,8 +75,8 @@ namespace plantsim {
   X(kMeasDriftTau, "meas.drift_tau_s", "s", 60.0, 0.1, 1e5, "drift correlation time")             \
   X(kMeasQuant, "meas.quant_kw", "kW", 0.0, 0.0, 1e4, "quantisation step (0 off)")                \
   X(kMeasAcRc, "meas.ac_rc_s", "s", 0.0, 0.0, 1e4, "AC-coupling RC (0 = DC coupled)")            \
-  X(kSolverRtol, "solver.rtol", "1", 1e-6, 1e-12, 1e-2, "CVODE relative tolerance")              \
-  X(kSolverAtol, "solver.atol", "pu", 1e-8, 1e-14, 1e-2, "CVODE absolute tolerance")
+  X(kSolverRtol, "solver.rtol", "1", 1e-5, 1e-12, 1e-2, "CVODE relative tolerance")              \
+  X(kSolverAtol, "solver.atol", "pu", 1e-7, 1e-14, 1e-2, "CVODE absolute tolerance")
 
 enum class P : int {
 #define X(id, name, unit, def, lo, hi, doc) id,
