@@ -159,3 +159,84 @@ TEST(PlantSim, ImpossibleOperatingPointIsAConfigError) {
 
 }  // namespace
 }  // namespace plantsim
+
+namespace plantsim {
+namespace {
+
+// The exact bias path (superposition) against the bias entering e inside the ODE: a tiny
+// deadband forces the latter, which must give the same response.
+TEST(PlantSim, ExactBiasPathEqualsBiasInsideTheOde) {
+  Params exact = quiet();  // tight tolerances so that only the formulations are compared
+  exact.set(P::kSolverRtol, 1e-9, "test");
+  exact.set(P::kSolverAtol, 1e-11, "test");
+  Params inside = exact;
+  inside.set(P::kGovDeadband, 1e-12, "test");
+  GensetPlant a(exact, {}, 1, milliseconds(1));
+  GensetPlant b(inside, {}, 1, milliseconds(1));
+  ASSERT_TRUE(a.split_bias_path());
+  ASSERT_FALSE(b.split_bias_path());
+  double worst_kw = 0.0;
+  for (int k = 0; k < 6000; ++k) {
+    const double bias = (k / 700) % 2 == 0 ? 1.0 : -0.5;
+    a.set_bias_pct(bias);
+    b.set_bias_pct(bias);
+    a.step();
+    b.step();
+    worst_kw = std::max(worst_kw, std::abs(a.electrical_power_kw() - b.electrical_power_kw()));
+  }
+  std::cout << "split vs in-ODE bias path: worst difference " << worst_kw << " kW\n";
+  EXPECT_LT(worst_kw, 0.01);  // swings are ~70 kW
+}
+
+TEST(PlantSim, ActuatorLimitHoldsWithoutWindUpOnTheExactPath) {
+  GensetPlant plant(quiet(), {}, 1, milliseconds(1));
+  ASSERT_TRUE(plant.split_bias_path());
+  const double tmax = plant.params()[P::kGovTmax];
+  plant.set_bias_pct(60.0);
+  double highest = 0.0;
+  for (int k = 0; k < 8000; ++k) {
+    plant.step();
+    highest = std::max(highest, plant.actuator_pu());
+  }
+  EXPECT_LE(highest, tmax + 1e-12);
+  EXPECT_NEAR(plant.actuator_pu(), tmax, 1e-9);  // pinned at the limit for seconds
+  plant.set_bias_pct(-60.0);
+  for (int k = 0; k < 300; ++k) plant.step();
+  // Without wind-up the actuator leaves the stop at once.
+  EXPECT_LT(plant.actuator_pu(), tmax - 0.05);
+}
+
+TEST(PlantSim, SwitchingToTheInOdePathMidRunIsSeamless) {
+  GensetPlant a(quiet(), {}, 1, milliseconds(1));
+  GensetPlant b(quiet(), {parse_change("gov.deadband_pu=1e-12@t=1.5")}, 1, milliseconds(1));
+  double worst_kw = 0.0;
+  for (int k = 0; k < 4000; ++k) {
+    a.set_bias_pct(k >= 1000 ? 1.0 : 0.0);
+    b.set_bias_pct(k >= 1000 ? 1.0 : 0.0);
+    a.step();
+    b.step();
+    worst_kw = std::max(worst_kw, std::abs(a.electrical_power_kw() - b.electrical_power_kw()));
+  }
+  EXPECT_FALSE(b.split_bias_path());
+  EXPECT_LT(worst_kw, 0.5);
+}
+
+TEST(PlantSim, FluxDecayAndAvrStartInEquilibrium) {
+  Params p = quiet();
+  p.set(P::kAltFluxDecay, 1.0, "test");
+  p.set(P::kAltAvr, 1.0, "test");
+  GensetPlant plant(p, {}, 1, milliseconds(1));
+  const double v0 = plant.measure().voltage_v;
+  for (int k = 0; k < 3000; ++k) plant.step();
+  EXPECT_NEAR(plant.electrical_power_kw(), 3500.0, 1e-3);
+  EXPECT_NEAR(plant.measure().voltage_v, v0, 1e-3);
+  plant.set_bias_pct(1.0);
+  for (int k = 0; k < 20000; ++k) plant.step();
+  EXPECT_FALSE(plant.measure().fault) << plant.last_error();
+  EXPECT_NEAR(plant.electrical_power_kw(), 3546.0, 2.0);
+  // The AVR holds the terminal voltage close to its reference under the new load.
+  EXPECT_NEAR(plant.measure().voltage_v / v0, 1.0, 0.01);
+}
+
+}  // namespace
+}  // namespace plantsim
