@@ -37,7 +37,8 @@ class BiasPath {
                   Vector* gamma) const;
   Eigen::Matrix<double, kStates, kStates> a_ = Eigen::Matrix<double, kStates, kStates>::Zero();
   Vector b_ = Vector::Zero();
-  Eigen::Matrix<double, kStates, kStates> phi_ = Eigen::Matrix<double, kStates, kStates>::Identity();
+  Eigen::Matrix<double, kStates, kStates> phi_ =
+      Eigen::Matrix<double, kStates, kStates>::Identity();
   Vector gamma_ = Vector::Zero();
   Vector s_ = Vector::Zero();
 };

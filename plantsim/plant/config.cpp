@@ -1,12 +1,12 @@
 #include "plantsim/plant/config.hpp"
 
 #include <fmt/format.h>
+#include <toml++/toml.h>
 
 #include <algorithm>
 #include <charconv>
 #include <fstream>
 #include <sstream>
-#include <toml++/toml.h>
 
 namespace plantsim {
 namespace {
@@ -26,8 +26,8 @@ void apply_table(const toml::table& table, const std::string& block, const std::
     const std::string where = fmt::format("{}:{}", origin, node.source().begin.line);
     const auto id = find_param(name);
     if (!id || name.find('.') != name.rfind('.')) {
-      throw ConfigError(fmt::format("{}: unknown parameter '{}' (see plantsim --list-params)",
-                                    where, name));
+      throw ConfigError(
+          fmt::format("{}: unknown parameter '{}' (see plantsim --list-params)", where, name));
     }
     double value = 0.0;
     if (node.is_boolean()) {
@@ -48,8 +48,8 @@ Params parse_toml(const std::string& text, const std::string& origin) {
   try {
     root = toml::parse(text, origin);
   } catch (const toml::parse_error& e) {
-    throw ConfigError(fmt::format("{}:{}: malformed TOML: {}", origin, e.source().begin.line,
-                                  e.description()));
+    throw ConfigError(
+        fmt::format("{}:{}: malformed TOML: {}", origin, e.source().begin.line, e.description()));
   }
   Params params;
   if (const auto* base = root.get("preset")) {
@@ -64,8 +64,9 @@ Params parse_toml(const std::string& text, const std::string& origin) {
     if (key.str() == "preset") continue;
     const auto* table = node.as_table();
     if (table == nullptr) {
-      throw ConfigError(fmt::format("{}:{}: '{}' must be a table of parameters ([gov], [engine], ...)",
-                                    origin, node.source().begin.line, key.str()));
+      throw ConfigError(
+          fmt::format("{}:{}: '{}' must be a table of parameters ([gov], [engine], ...)", origin,
+                      node.source().begin.line, key.str()));
     }
     apply_table(*table, std::string(key.str()), origin, &params);
   }

@@ -39,8 +39,7 @@ void Engine::derivatives(const double* x, double fuel_delayed_pu, double* dx) co
 }
 
 FuelDelayLine::FuelDelayLine(double dt_s, double max_delay_s, double initial_pu)
-    : dt_s_(dt_s),
-      ring_(static_cast<std::size_t>(std::ceil(max_delay_s / dt_s)) + 4, initial_pu) {}
+    : dt_s_(dt_s), ring_(static_cast<std::size_t>(std::ceil(max_delay_s / dt_s)) + 4, initial_pu) {}
 
 void FuelDelayLine::push(double t_s, double rack_pu) {
   head_ = (head_ + 1) % ring_.size();

@@ -14,8 +14,8 @@
 
 namespace plantsim {
 
-double dead_time_s(const Params& p);            // engine.dead_time_s, or the formula when 0
-double cylinder_factor(const Params& p);        // c = sum(health_k) / n
+double dead_time_s(const Params& p);      // engine.dead_time_s, or the formula when 0
+double cylinder_factor(const Params& p);  // c = sum(health_k) / n
 double map_fuel_limit_pu(const Params& p, double boost_pu);
 
 class Engine {
@@ -51,7 +51,8 @@ class FuelDelayLine {
 // Torque pulsation of the cylinders at harmonics h of the cycle frequency (N/120 Hz for a
 // four-stroke engine), carried through the linear torque-to-measured-power response G(s) and
 // added in the output path (it is far above the governor's bandwidth):
-//   ripple = m Re{ sum_h A_h G(j h W) e^{j h phi} },  A_h = 2 c_h / n_eff sum_k health_k e^{-j h phi_k}
+//   ripple = m Re{ sum_h A_h G(j h W) e^{j h phi} },  A_h = 2 c_h / n_eff sum_k health_k e^{-j h
+//   phi_k}
 // with c_h the Fourier coefficients of a Gaussian torque pulse. Balanced cylinders leave only
 // the firing harmonics (h multiple of n); a dead cylinder adds every cycle harmonic.
 class FiringRipple {

@@ -24,8 +24,8 @@ SolverOptions solver_options(const Params& p) {
 
 }  // namespace
 
-GensetPlant::GensetPlant(const Params& params, std::vector<TimedChange> changes,
-                         std::uint64_t seed, std::chrono::nanoseconds tick)
+GensetPlant::GensetPlant(const Params& params, std::vector<TimedChange> changes, std::uint64_t seed,
+                         std::chrono::nanoseconds tick)
     : model_(params),
       tick_(tick),
       dt_s_(std::chrono::duration<double>(tick).count()),

@@ -40,8 +40,7 @@ void Degov1::derivatives(const double* x, double pe_pu, double dw_pu, double bia
   if (rate > 0.0) v = std::clamp(v, -rate, rate);
   // Non-windup integrator: stop at a limit while the input pushes further out.
   const double xf = x[kXf];
-  const bool pushing_out =
-      (xf >= p_[P::kGovTmax] && v > 0.0) || (xf <= p_[P::kGovTmin] && v < 0.0);
+  const bool pushing_out = (xf >= p_[P::kGovTmax] && v > 0.0) || (xf <= p_[P::kGovTmin] && v < 0.0);
   if (limit_integrator && pushing_out) v = 0.0;
   dx[kXf] = v;
 }

@@ -21,8 +21,9 @@ void write_tf_json(const LinearModel& m, const std::filesystem::path& file) {
   j["output"] = "power_kw";
   j["units"] = {{"input", "% of rated power"}, {"output", "kW"}, {"time", "s"}};
   j["source"] = {{"plant", m.preset},
-                 {"method", "central-difference linearisation about the operating point; "
-                            "rational part fitted to H(s) e^{s delay_s}"},
+                 {"method",
+                  "central-difference linearisation about the operating point; "
+                  "rational part fitted to H(s) e^{s delay_s}"},
                  {"fit_band_hz", {m.fit_band_lo_hz, m.fit_band_hi_hz}},
                  {"tf_max_error_db", m.tf_max_error_db},
                  {"tf_max_error_deg", m.tf_max_error_deg}};

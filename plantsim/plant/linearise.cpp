@@ -8,8 +8,8 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <numbers>
-#include <vector>
 #include <unsupported/Eigen/MatrixFunctions>
+#include <vector>
 
 #include "plantsim/plant/config.hpp"
 #include "plantsim/plant/engine.hpp"
@@ -21,7 +21,7 @@ namespace {
 constexpr double kTwoPi = 2.0 * std::numbers::pi;
 constexpr double kFitLoHz = 0.002;
 constexpr double kFitHiHz = 20.0;
-constexpr double kTolDb = 0.02;   // rational part vs exact response over the fit band
+constexpr double kTolDb = 0.02;  // rational part vs exact response over the fit band
 constexpr double kTolDeg = 0.15;
 
 // Central differences of rhs(x, u, f): columns of A, then b (per pu bias) and b_f.
@@ -133,9 +133,9 @@ void drop_frozen_states(LinearModel* lm) {
 
 std::complex<double> LinearModel::response(double freq_hz) const {
   const std::complex<double> s{0.0, kTwoPi * freq_hz};
-  const Eigen::MatrixXcd m = s * Eigen::MatrixXcd::Identity(a.rows(), a.cols()) -
-                             a.cast<std::complex<double>>() -
-                             std::exp(-s * delay_s) * (b_fuel * c_fuel).cast<std::complex<double>>();
+  const Eigen::MatrixXcd m =
+      s * Eigen::MatrixXcd::Identity(a.rows(), a.cols()) - a.cast<std::complex<double>>() -
+      std::exp(-s * delay_s) * (b_fuel * c_fuel).cast<std::complex<double>>();
   const Eigen::VectorXcd x = m.partialPivLu().solve(b.cast<std::complex<double>>());
   return (c.cast<std::complex<double>>() * x)(0);
 }

@@ -40,14 +40,14 @@ struct LinearModel {
   Eigen::RowVectorXd c_fuel;  // rack position, pu
   double delay_s = 0.0;       // fuel dead time
 
-  Eigen::VectorXd num, den;   // rational part, highest power first, den monic
+  Eigen::VectorXd num, den;  // rational part, highest power first, den monic
   double fit_band_lo_hz = 0.0, fit_band_hi_hz = 0.0;
   double tf_max_error_db = 0.0, tf_max_error_deg = 0.0;
 
-  double fn_hz = 0.0;            // electromechanical mode (least damped pole pair of den)
+  double fn_hz = 0.0;  // electromechanical mode (least damped pole pair of den)
   double zeta = 0.0;
   double dc_gain_kw_per_pct = 0.0;
-  SopdtFit sopdt;                // best SOPDT over 0.5-5 Hz
+  SopdtFit sopdt;  // best SOPDT over 0.5-5 Hz
   std::string preset;
 
   std::complex<double> response(double freq_hz) const;     // exact, delay in the loop

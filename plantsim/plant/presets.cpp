@@ -23,17 +23,23 @@ using Overrides = std::vector<std::pair<P, double>>;
 //  * small actuator/control-box lags keep the apparent SOPDT delay near 80 ms.
 const Overrides& stornoway() {
   static const Overrides o = {
-      {P::kRatedKw, 4600.0},    {P::kPowerKw, 3500.0},     {P::kFreqHz, 50.0},
-      {P::kGridConnected, 1.0}, {P::kGovR, 0.05},          {P::kGovTe, 5.0},
-      {P::kGovSpeedGain, 0.05}, {P::kGovT1, 0.2},          {P::kGovT2, 0.003},
-      {P::kGovT3, 0.2},         {P::kGovK, 4.0},           {P::kGovT4, 5.0},
-      {P::kGovT5, 0.004},       {P::kGovT6, 0.002},        {P::kGovTmin, 0.0},
-      {P::kGovTmax, 1.1},       {P::kEngRpm, 600.0},       {P::kEngCylinders, 12.0},
-      {P::kEngDeadTime, 0.0},   {P::kEngCombustionLag, 0.008}, {P::kEngBoostLag, 2.0},
-      {P::kAltH, 2.0},          {P::kAltD, 11.0},          {P::kAltE, 1.1},
-      {P::kAltXdp, 0.25},       {P::kGridXe, 0.25},        {P::kGridV, 1.0},
-      {P::kMeasLag, 0.003},     {P::kMeasNoise, 5.0},      {P::kMeasPickup, 3.0},
-      {P::kMeasDrift, 5.0},     {P::kMeasDriftTau, 60.0},  {P::kMeasQuant, 1.0},
+      {P::kRatedKw, 4600.0},    {P::kPowerKw, 3500.0},
+      {P::kFreqHz, 50.0},       {P::kGridConnected, 1.0},
+      {P::kGovR, 0.05},         {P::kGovTe, 5.0},
+      {P::kGovSpeedGain, 0.05}, {P::kGovT1, 0.2},
+      {P::kGovT2, 0.003},       {P::kGovT3, 0.2},
+      {P::kGovK, 4.0},          {P::kGovT4, 5.0},
+      {P::kGovT5, 0.004},       {P::kGovT6, 0.002},
+      {P::kGovTmin, 0.0},       {P::kGovTmax, 1.1},
+      {P::kEngRpm, 600.0},      {P::kEngCylinders, 12.0},
+      {P::kEngDeadTime, 0.0},   {P::kEngCombustionLag, 0.008},
+      {P::kEngBoostLag, 2.0},   {P::kAltH, 2.0},
+      {P::kAltD, 11.0},         {P::kAltE, 1.1},
+      {P::kAltXdp, 0.25},       {P::kGridXe, 0.25},
+      {P::kGridV, 1.0},         {P::kMeasLag, 0.003},
+      {P::kMeasNoise, 5.0},     {P::kMeasPickup, 3.0},
+      {P::kMeasDrift, 5.0},     {P::kMeasDriftTau, 60.0},
+      {P::kMeasQuant, 1.0},
   };
   return o;
 }

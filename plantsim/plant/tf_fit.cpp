@@ -131,7 +131,8 @@ SopdtFit fit_sopdt(const LinearModel& model, double lo_hz, double hi_hz) {
   const Eigen::VectorXd r = residual(best);
   for (int i = 0; i < kPoints; ++i) {
     out.max_error_db = std::max(out.max_error_db, std::abs(r[2 * i]) * 20.0 / std::log(10.0));
-    out.max_error_deg = std::max(out.max_error_deg, std::abs(r[2 * i + 1]) * 180.0 / std::numbers::pi);
+    out.max_error_deg =
+        std::max(out.max_error_deg, std::abs(r[2 * i + 1]) * 180.0 / std::numbers::pi);
   }
   return out;
 }

@@ -9,7 +9,8 @@ namespace plantsim {
 std::string to_toml(const Params& params, const std::string& header) {
   std::ostringstream out;
   std::istringstream lines(header);
-  for (std::string line; std::getline(lines, line);) out << (line.empty() ? "#" : "# " + line) << '\n';
+  for (std::string line; std::getline(lines, line);)
+    out << (line.empty() ? "#" : "# " + line) << '\n';
   std::string_view block;
   const auto& specs = param_specs();
   for (std::size_t i = 0; i < specs.size(); ++i) {

@@ -32,8 +32,8 @@ void silent_handler(int, const char*, const char*, char*, void*) {}
 }  // namespace
 
 SolverError::SolverError(const std::string& function, int code)
-    : std::runtime_error(fmt::format("solver: {} failed with {} ({})", function, flag_name(code),
-                                     code)),
+    : std::runtime_error(
+          fmt::format("solver: {} failed with {} ({})", function, flag_name(code), code)),
       function_(function),
       code_(code) {}
 

@@ -25,8 +25,8 @@ class Mode : public OdeSystem {
   }
   static double exact(double t) {
     const double wd = kWn * std::sqrt(1.0 - kZeta * kZeta);
-    return 1.0 - std::exp(-kZeta * kWn * t) *
-                     (std::cos(wd * t) + kZeta * kWn / wd * std::sin(wd * t));
+    return 1.0 -
+           std::exp(-kZeta * kWn * t) * (std::cos(wd * t) + kZeta * kWn / wd * std::sin(wd * t));
   }
 };
 
@@ -72,7 +72,8 @@ void BM_PlantVsTightTolerance(benchmark::State& state) {
       b.set_bias_pct(bias);
       a.step();
       b.step();
-      max_err_kw = std::max(max_err_kw, std::abs(a.electrical_power_kw() - b.electrical_power_kw()));
+      max_err_kw =
+          std::max(max_err_kw, std::abs(a.electrical_power_kw() - b.electrical_power_kw()));
       max_swing_kw = std::max(max_swing_kw, std::abs(b.electrical_power_kw() - 3500.0));
     }
   }

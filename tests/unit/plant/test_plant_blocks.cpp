@@ -48,8 +48,9 @@ TEST(PlantBlocks, GovernorRampAsymptote) {
   const Degov1 gov(p);
   const double pe0 = p[P::kPowerKw] / p[P::kRatedKw];
   const double bias = 0.01;
-  LambdaOde ode(Degov1::kStates,
-                [&](double, const double* x, double* dx) { gov.derivatives(x, pe0, 0.0, bias, dx); });
+  LambdaOde ode(Degov1::kStates, [&](double, const double* x, double* dx) {
+    gov.derivatives(x, pe0, 0.0, bias, dx);
+  });
   Eigen::VectorXd x0(Degov1::kStates);
   gov.init(pe0, 0.7, x0.data());
   CvodeSolver solver(ode, 0.0, x0, tight());
@@ -64,8 +65,9 @@ TEST(PlantBlocks, GovernorIntegratorDoesNotWindUp) {
   const Degov1 gov(p);
   const double pe0 = p[P::kPowerKw] / p[P::kRatedKw];
   double bias = 0.5;
-  LambdaOde ode(Degov1::kStates,
-                [&](double, const double* x, double* dx) { gov.derivatives(x, pe0, 0.0, bias, dx); });
+  LambdaOde ode(Degov1::kStates, [&](double, const double* x, double* dx) {
+    gov.derivatives(x, pe0, 0.0, bias, dx);
+  });
   Eigen::VectorXd x0(Degov1::kStates);
   gov.init(pe0, pe0, x0.data());
   CvodeSolver solver(ode, 0.0, x0, tight());
@@ -172,7 +174,7 @@ TEST(PlantBlocks, FiringRippleBalancedAndWithDeadCylinder) {
   const auto balanced = ripple_record(p, dt, n);
   const double sigma = 0.5 * p[P::kEngPulseWidth] * std::numbers::pi / 360.0;
   const double c12 = std::exp(-0.5 * 144.0 * sigma * sigma);
-  EXPECT_LT(amplitude(balanced, dt, 5.0), 1e-9);              // no cycle harmonic
+  EXPECT_LT(amplitude(balanced, dt, 5.0), 1e-9);  // no cycle harmonic
   EXPECT_NEAR(amplitude(balanced, dt, 60.0), 0.8 * 2.0 * c12, 1e-3 * 0.8 * 2 * c12);  // firing
   p.set(P::kInjector3, 0.0, "test");
   const auto dead = ripple_record(p, dt, n);

@@ -36,8 +36,8 @@ TEST(PlantConfig, EveryParameterHasUnitAndDefaultInRange) {
 }
 
 TEST(PlantConfig, TomlOverridesOnTopOfPreset) {
-  const Params p = parse_toml("preset = \"stornoway\"\n[gov]\nr_pu = 0.04\n[alt]\nflux_decay = true\n",
-                              "x.toml");
+  const Params p = parse_toml(
+      "preset = \"stornoway\"\n[gov]\nr_pu = 0.04\n[alt]\nflux_decay = true\n", "x.toml");
   Params expected = preset("stornoway");
   expected.set(P::kGovR, 0.04, "test");
   expected.set(P::kAltFluxDecay, 1.0, "test");

@@ -38,8 +38,8 @@ TEST(PlantPreset, TomlFileEqualsCompiledPreset) {
 
 TEST(PlantPreset, LinearisedModeDampingAndDelayInSpec) {
   const LinearModel& lm = stornoway();
-  std::cout << "fn " << lm.fn_hz << " Hz, zeta " << lm.zeta << ", delay " << lm.delay_s
-            << " s, dc " << lm.dc_gain_kw_per_pct << " kW/%\n";
+  std::cout << "fn " << lm.fn_hz << " Hz, zeta " << lm.zeta << ", delay " << lm.delay_s << " s, dc "
+            << lm.dc_gain_kw_per_pct << " kW/%\n";
   EXPECT_GE(lm.fn_hz, 1.8);
   EXPECT_LE(lm.fn_hz, 2.2);
   EXPECT_GE(lm.zeta, 0.07);
@@ -53,8 +53,8 @@ TEST(PlantPreset, LinearisedModeDampingAndDelayInSpec) {
 TEST(PlantPreset, SecondOrderPlusDeadTimeMatchesOverIdentificationBand) {
   const LinearModel& lm = stornoway();
   const SopdtFit& s = lm.sopdt;
-  std::cout << "SOPDT K " << s.gain_kw_per_pct << " kW/%, fn " << s.fn_hz << " Hz, zeta "
-            << s.zeta << ", Td " << s.delay_s << " s\n";
+  std::cout << "SOPDT K " << s.gain_kw_per_pct << " kW/%, fn " << s.fn_hz << " Hz, zeta " << s.zeta
+            << ", Td " << s.delay_s << " s\n";
   double worst_db = 0.0, worst_deg = 0.0;
   for (int i = 0; i <= 900; ++i) {  // independent, finer grid than the fit used
     const double f = 0.5 + 4.5 * i / 900.0;
@@ -93,8 +93,10 @@ TEST(PlantPreset, CommittedModelFileMatchesFreshLinearisation) {
   const auto den = j.at("den").get<std::vector<double>>();
   ASSERT_EQ(num.size(), static_cast<std::size_t>(lm.num.size()));
   ASSERT_EQ(den.size(), static_cast<std::size_t>(lm.den.size()));
-  for (std::size_t k = 0; k < num.size(); ++k) EXPECT_NEAR(num[k], lm.num[k], 1e-6 * std::abs(lm.num[k]));
-  for (std::size_t k = 0; k < den.size(); ++k) EXPECT_NEAR(den[k], lm.den[k], 1e-6 * std::abs(lm.den[k]));
+  for (std::size_t k = 0; k < num.size(); ++k)
+    EXPECT_NEAR(num[k], lm.num[k], 1e-6 * std::abs(lm.num[k]));
+  for (std::size_t k = 0; k < den.size(); ++k)
+    EXPECT_NEAR(den[k], lm.den[k], 1e-6 * std::abs(lm.den[k]));
   EXPECT_NEAR(j.at("delay_s").get<double>(), lm.delay_s, 1e-12);
   const auto& d = j.at("derived");
   EXPECT_NEAR(d.at("fn_hz").get<double>(), lm.fn_hz, 1e-6);

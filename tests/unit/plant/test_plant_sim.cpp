@@ -41,7 +41,8 @@ TEST(PlantSim, BiasStepMatchesLinearModel) {
     plant.set_bias_pct(k * dt >= t_step ? step_pct : 0.0);
     plant.step();
   }
-  const Eigen::VectorXd yhat = tf_step_response(lm.num, lm.den, lm.delay_s, step_pct, t_step, dt, n);
+  const Eigen::VectorXd yhat =
+      tf_step_response(lm.num, lm.den, lm.delay_s, step_pct, t_step, dt, n);
   const double fit = fit_percent(y, yhat);
   std::cout << "nonlinear vs linear TF step fit " << fit << " %, final " << y[n - 1] << " kW\n";
   EXPECT_GE(fit, 95.0);

@@ -1,6 +1,6 @@
 // CVODE wrapper: accuracy against an analytic second-order response, typed errors.
-#include <gtest/gtest.h>
 #include <cvode/cvode.h>
+#include <gtest/gtest.h>
 
 #include <cmath>
 #include <numbers>
@@ -23,8 +23,8 @@ class SecondOrder : public OdeSystem {
   }
   double exact(double t) const {
     const double wd = wn_ * std::sqrt(1.0 - zeta_ * zeta_);
-    return 1.0 - std::exp(-zeta_ * wn_ * t) *
-                     (std::cos(wd * t) + zeta_ * wn_ / wd * std::sin(wd * t));
+    return 1.0 -
+           std::exp(-zeta_ * wn_ * t) * (std::cos(wd * t) + zeta_ * wn_ / wd * std::sin(wd * t));
   }
 
  private:
