@@ -2,6 +2,7 @@
 
 #include <arpa/inet.h>
 #include <fcntl.h>
+#include <fmt/format.h>
 #include <netinet/in.h>
 #include <sys/select.h>
 #include <sys/socket.h>
@@ -12,17 +13,13 @@
 #include <cerrno>
 #include <cstring>
 
-#include <fmt/format.h>
-
 namespace drivers {
 namespace {
 
 constexpr int kMbapLength = 7;  // transaction id, protocol id, length, unit id
 constexpr int kMaxPduLength = 253;
 
-std::uint16_t be16(const std::uint8_t* p) {
-  return static_cast<std::uint16_t>((p[0] << 8) | p[1]);
-}
+std::uint16_t be16(const std::uint8_t* p) { return static_cast<std::uint16_t>((p[0] << 8) | p[1]); }
 
 LinkError os_error(LinkErrorKind kind, std::string where, int err) {
   return LinkError{kind, std::move(where), modbus_strerror(err)};

@@ -41,18 +41,18 @@ struct ModbusRequest {
 };
 
 struct ModbusServerCounters {
-  std::uint64_t requests = 0;          // well-formed requests answered (incl. exceptions)
-  std::uint64_t malformed = 0;         // frames that could not be parsed (connection closed / RTU flushed)
-  std::uint64_t connections = 0;       // TCP connections accepted
-  std::uint64_t refused = 0;           // TCP connections closed at once (too many clients)
+  std::uint64_t requests = 0;   // well-formed requests answered (incl. exceptions)
+  std::uint64_t malformed = 0;  // frames that could not be parsed (connection closed / RTU flushed)
+  std::uint64_t connections = 0;  // TCP connections accepted
+  std::uint64_t refused = 0;      // TCP connections closed at once (too many clients)
 };
 
 struct ModbusServerOptions {
   int holding_count = 0;
   int input_count = 0;
-  int unit = 1;              // RTU: requests for other units are ignored; TCP: any unit answered
-  int max_clients = 16;      // TCP
-  bool debug = false;        // libmodbus frame trace on stderr
+  int unit = 1;          // RTU: requests for other units are ignored; TCP: any unit answered
+  int max_clients = 16;  // TCP
+  bool debug = false;    // libmodbus frame trace on stderr
 };
 
 class ModbusServer {
@@ -77,8 +77,8 @@ class ModbusServer {
   LinkResult<void> poll(std::chrono::milliseconds timeout, const Hook& before_reply);
 
   modbus_mapping_t& mapping() { return *mapping_; }
-  int port() const { return port_; }          // actual TCP port (after an ephemeral bind)
-  std::string endpoint() const;               // "tcp://127.0.0.1:40123" or "rtu:/dev/ttyX?baud=19200"
+  int port() const { return port_; }  // actual TCP port (after an ephemeral bind)
+  std::string endpoint() const;       // "tcp://127.0.0.1:40123" or "rtu:/dev/ttyX?baud=19200"
   const ModbusServerCounters& counters() const { return counters_; }
   int client_count() const { return static_cast<int>(clients_.size()); }
 

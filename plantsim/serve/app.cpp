@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 #include <signal.h>
 
+#include <csignal>
 #include <cstdio>
 #include <iostream>
 
@@ -82,8 +83,7 @@ bool open_endpoints(const ServeOptions& o, Running& r) {
   if (o.can) {
     auto node = CanNode::open(parse_can_endpoint(*o.can), *r.governor, o.clock);
     if (!node) {
-      std::cerr << "plantsim: --can " << node.error().where << ": " << node.error().detail
-                << "\n";
+      std::cerr << "plantsim: --can " << node.error().where << ": " << node.error().detail << "\n";
       return false;
     }
     r.can = std::move(node.value());
@@ -93,10 +93,10 @@ bool open_endpoints(const ServeOptions& o, Running& r) {
 
 // Serves until a stop signal, --duration of plant time, or a transport failure.
 int wait_for_stop(const ServeOptions& o, Running& r, const sigset_t& stop_signals) {
-  const auto duration =
-      o.duration_s ? std::optional(std::chrono::duration_cast<std::chrono::nanoseconds>(
-                         std::chrono::duration<double>(*o.duration_s)))
-                   : std::nullopt;
+  const auto duration = o.duration_s
+                            ? std::optional(std::chrono::duration_cast<std::chrono::nanoseconds>(
+                                  std::chrono::duration<double>(*o.duration_s)))
+                            : std::nullopt;
   auto next_readout = Clock::now() + std::chrono::seconds(1);
   const timespec poll{0, 20'000'000};
   for (;;) {
@@ -121,6 +121,7 @@ int wait_for_stop(const ServeOptions& o, Running& r, const sigset_t& stop_signal
 
 int serve(const ServeOptions& o, const PlantHooks& hooks) {
   const sigset_t stop_signals = block_stop_signals();
+  std::signal(SIGPIPE, SIG_IGN);  // a reader of --readout going away must not kill the plant
   Running r;
   try {
     if (o.linearise_to) {

@@ -30,7 +30,7 @@ struct ServeOptions {
   std::optional<std::string> modbus;  // endpoint text; default tcp://127.0.0.1:1502 if no --can
   std::optional<std::string> can;
   ClockMode clock = ClockMode::kRealtime;
-  std::optional<double> duration_s;   // stop at this plant time
+  std::optional<double> duration_s;  // stop at this plant time
   bool readout = false;
   std::optional<std::filesystem::path> linearise_to;
 };

@@ -1,10 +1,9 @@
 #include "plantsim/serve/can_node.hpp"
 
+#include <fmt/format.h>
 #include <poll.h>
 
 #include <algorithm>
-
-#include <fmt/format.h>
 
 #include "drivers/can/j1939.hpp"
 
@@ -24,8 +23,7 @@ bool due(const GovernorSnapshot& s, std::chrono::nanoseconds tick,
 }  // namespace
 
 drivers::LinkResult<std::unique_ptr<CanNode>> CanNode::open(const drivers::LinkUri& endpoint,
-                                                            Governor& governor,
-                                                            ClockMode clock) {
+                                                            Governor& governor, ClockMode clock) {
   auto ep = drivers::can::open_can_endpoint(endpoint, drivers::can::CanRole::kNode);
   if (!ep) return ep.error();
   const std::string name = endpoint.scheme == drivers::LinkScheme::kCanUdp
@@ -37,8 +35,8 @@ drivers::LinkResult<std::unique_ptr<CanNode>> CanNode::open(const drivers::LinkU
   return node;
 }
 
-CanNode::CanNode(std::unique_ptr<drivers::can::CanEndpoint> ep, Governor& governor,
-                 ClockMode clock, std::string endpoint)
+CanNode::CanNode(std::unique_ptr<drivers::can::CanEndpoint> ep, Governor& governor, ClockMode clock,
+                 std::string endpoint)
     : ep_(std::move(ep)),
       governor_(governor),
       clock_(clock),
@@ -121,8 +119,7 @@ void CanNode::handle_command(const can_frame& frame) {
       ++counters_.bad_checksum;
       return;
     }
-    const bool in_sequence =
-        !command_counter_ || m->counter == ((*command_counter_ + 1) & 0x0F);
+    const bool in_sequence = !command_counter_ || m->counter == ((*command_counter_ + 1) & 0x0F);
     command_counter_ = m->counter;
     if (!in_sequence) {
       ++counters_.bad_counter;
@@ -163,17 +160,17 @@ void CanNode::on_tick(const GovernorSnapshot& s) {
   std::lock_guard lock(mu_);
   if (!ep_->has_peer()) return;
   const auto& m = s.measurement;
-  send_locked(j1939::encode_plant_sample(j1939::PlantSample{
-      m.power_w, static_cast<std::uint16_t>(s.ticks & 0xFFFF),
-      static_cast<std::uint8_t>(s.status & 0xFF)}));
+  send_locked(j1939::encode_plant_sample(
+      j1939::PlantSample{m.power_w, static_cast<std::uint16_t>(s.ticks & 0xFFFF),
+                         static_cast<std::uint8_t>(s.status & 0xFF)}));
   const auto tick = governor_.tick_period();
   if (due(s, tick, kEec1Period)) {
     // Torque in % of rated: P = T w, so T/T_rated = (P/P_rated) (w_rated/w).
-    const double torque_pct =
-        m.speed_rpm > 0.0 ? 100.0 * m.power_w / governor_.rated_power_w() *
-                                (synchronous_rpm_ / m.speed_rpm)
-                          : 0.0;
-    send_locked(j1939::encode_eec1(j1939::Eec1{m.speed_rpm, std::clamp(torque_pct, -125.0, 125.0)}));
+    const double torque_pct = m.speed_rpm > 0.0 ? 100.0 * m.power_w / governor_.rated_power_w() *
+                                                      (synchronous_rpm_ / m.speed_rpm)
+                                                : 0.0;
+    send_locked(
+        j1939::encode_eec1(j1939::Eec1{m.speed_rpm, std::clamp(torque_pct, -125.0, 125.0)}));
   }
   if (due(s, tick, kGtacpPeriod)) send_locked(j1939::encode_gtacp(j1939::Gtacp{m.power_w, 0.0}));
 }

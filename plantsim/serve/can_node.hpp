@@ -34,10 +34,10 @@ namespace plantsim::serve {
 
 struct CanCounters {
   std::uint64_t received = 0;
-  std::uint64_t accepted = 0;       // commands, TSC1 and lockstep frames acted on
-  std::uint64_t bad_checksum = 0;   // also malformed frames of a known PGN
+  std::uint64_t accepted = 0;      // commands, TSC1 and lockstep frames acted on
+  std::uint64_t bad_checksum = 0;  // also malformed frames of a known PGN
   std::uint64_t bad_counter = 0;
-  std::uint64_t ignored = 0;        // other PGNs, lockstep frames in realtime
+  std::uint64_t ignored = 0;  // other PGNs, lockstep frames in realtime
   std::uint64_t sent = 0;
   std::uint64_t send_failed = 0;
   std::uint64_t rejected() const { return bad_checksum + bad_counter; }

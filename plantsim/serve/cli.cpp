@@ -1,8 +1,8 @@
 // Command-line parsing for `plantsim` (CLI11). Everything here only fills ServeOptions;
 // serve() in app.cpp does the work.
-#include <CLI/CLI.hpp>
 #include <fmt/format.h>
 
+#include <CLI/CLI.hpp>
 #include <iostream>
 
 #include "plantsim/serve/app.hpp"
@@ -18,9 +18,10 @@ void add_options(CLI::App& app, ServeOptions& o, std::string& clock, std::string
                  "Modbus endpoint: tcp://HOST:PORT (port 0 = ephemeral) or "
                  "rtu:DEVICE?baud=19200[&parity=N][&unit=1] (default tcp://127.0.0.1:1502)");
   app.add_option("--can", o.can, "CAN endpoint: udp://HOST:PORT or socketcan:IFACE");
-  app.add_option("--clock", clock, "realtime (plant follows the monotonic clock) or lockstep "
-                                   "(plant advances only when the rig writes holding 100 / "
-                                   "sends PGN 0xFF52)")
+  app.add_option("--clock", clock,
+                 "realtime (plant follows the monotonic clock) or lockstep "
+                 "(plant advances only when the rig writes holding 100 / "
+                 "sends PGN 0xFF52)")
       ->default_str("realtime");
   app.add_option("--tick", tick, "Plant tick, e.g. 1ms, 500us")->default_str("1ms");
   app.add_option("--fault", o.plant.faults, "Parameter change NAME=VALUE@t=SECONDS (repeatable)");
@@ -52,8 +53,9 @@ void validate(ServeOptions& o, const std::string& clock, const std::string& tick
 }  // namespace
 
 int plantsim_main(int argc, char** argv, const PlantHooks& hooks) {
-  CLI::App app{"plantsim: emulated governor / diesel engine / alternator plant serving the "
-               "rig's Modbus and CAN maps"};
+  CLI::App app{
+      "plantsim: emulated governor / diesel engine / alternator plant serving the "
+      "rig's Modbus and CAN maps"};
   ServeOptions options;
   std::string clock = "realtime";
   std::string tick = "1ms";

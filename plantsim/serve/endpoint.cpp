@@ -1,10 +1,10 @@
 #include "plantsim/serve/endpoint.hpp"
 
+#include <fmt/format.h>
+
 #include <charconv>
 #include <cmath>
 #include <map>
-
-#include <fmt/format.h>
 
 #include "plantsim/plant/plant.hpp"
 
@@ -46,7 +46,8 @@ std::chrono::nanoseconds parse_tick(const std::string& text) {
       {"ns", 1.0}, {"us", 1e3}, {"ms", 1e6}, {"s", 1e9}};
   const auto it = kNsPer.find(unit);
   if (ec != std::errc{} || it == kNsPer.end() || !std::isfinite(value)) {
-    throw ConfigError(fmt::format("--tick '{}': expected a duration like 1ms, 500us, 0.002s", text));
+    throw ConfigError(
+        fmt::format("--tick '{}': expected a duration like 1ms, 500us, 0.002s", text));
   }
   const double ns = value * it->second;
   if (ns < 1e5 || ns > 1e9) {

@@ -40,8 +40,8 @@ struct GovernorSnapshot {
   double bias_requested_pct = 0.0;
   bool enabled = false;
   bool heartbeat_lost = true;
-  std::uint16_t status = 0;       // drivers::StatusBit flags
-  std::uint64_t ticks = 0;        // ticks taken (the sample counter is its low 16 bits)
+  std::uint16_t status = 0;  // drivers::StatusBit flags
+  std::uint64_t ticks = 0;   // ticks taken (the sample counter is its low 16 bits)
   std::chrono::nanoseconds plant_time{0};
 };
 
@@ -61,7 +61,7 @@ class Governor {
   void set_enable(bool enable);
   void heartbeat(CommandSource source, std::uint32_t token);
 
-  void tick();                     // one plant tick
+  void tick();                        // one plant tick
   void advance(std::uint32_t ticks);  // lockstep: exactly `ticks` ticks, then return
   GovernorSnapshot snapshot() const;
 

@@ -31,8 +31,7 @@ class ModbusNode {
  public:
   // Opens (binds / opens the device); errors name the endpoint. Does not start serving.
   static drivers::LinkResult<std::unique_ptr<ModbusNode>> open(const drivers::LinkUri& endpoint,
-                                                               Governor& governor,
-                                                               ClockMode clock);
+                                                               Governor& governor, ClockMode clock);
   ~ModbusNode();
   void start();
   void stop();  // joins the thread; idempotent

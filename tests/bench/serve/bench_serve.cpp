@@ -7,10 +7,10 @@
 //   3. the realtime clock at 1 kHz with the real plant in this process, a Modbus server and a
 //      rig-like client at 100 Hz: tick jitter p50/p99/max over --jitter-s seconds.
 // Usage: bench_serve [--exchanges N] [--jitter-s S] [--plantsim PATH]
-#include <CLI/CLI.hpp>
 #include <fmt/format.h>
 #include <modbus/modbus.h>
 
+#include <CLI/CLI.hpp>
 #include <atomic>
 #include <filesystem>
 #include <thread>
@@ -26,9 +26,10 @@ using namespace std::chrono_literals;
 namespace serve = plantsim::serve;
 
 void print(const char* what, const plantsim::bench::ExchangeFigures& f) {
-  fmt::print("{:<44} {:>6} exchanges  {:7.2f} s wall  {:8.1f} sim-s/wall-s  "
-             "exchange p50 {:6.0f} us  p99 {:6.0f} us\n",
-             what, f.exchanges, f.wall_s, f.sim_per_wall(), f.p50_us, f.p99_us);
+  fmt::print(
+      "{:<44} {:>6} exchanges  {:7.2f} s wall  {:8.1f} sim-s/wall-s  "
+      "exchange p50 {:6.0f} us  p99 {:6.0f} us\n",
+      what, f.exchanges, f.wall_s, f.sim_per_wall(), f.p50_us, f.p99_us);
 }
 
 // A rig at 100 Hz: bias, heartbeat, enable, then the input registers, until `stop`.
@@ -55,7 +56,8 @@ void realtime_jitter(double seconds) {
   auto uri = drivers::parse_link_uri("tcp://127.0.0.1:0", "modbus");
   auto node = serve::ModbusNode::open(uri.value(), governor, serve::ClockMode::kRealtime);
   if (!node) throw std::runtime_error(node.error().message());
-  const int port = std::stoi(node.value()->endpoint().substr(node.value()->endpoint().rfind(':') + 1));
+  const int port =
+      std::stoi(node.value()->endpoint().substr(node.value()->endpoint().rfind(':') + 1));
   node.value()->start();
   serve::RealtimeClock clock(governor);
   const auto t0 = std::chrono::steady_clock::now();
@@ -66,16 +68,17 @@ void realtime_jitter(double seconds) {
   stop = true;
   rig.join();
   clock.stop();
-  const double wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  const double wall_s =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   node.value()->stop();
   const auto j = clock.jitter();
   const double plant_s = std::chrono::duration<double>(governor.snapshot().plant_time).count();
-  fmt::print("realtime 1 kHz, stornoway, rig at 100 Hz       {:8} ticks over {:.1f} s  jitter "
-             "p50 {:.0f} us  p99 {:.0f} us  max {:.0f} us  late>1 tick {}  plant-wall {:+.1f} ms "
-             "({})\n",
-             j.ticks, wall_s, j.p50_us, j.p99_us, j.max_us, j.late_over_1_tick,
-             (plant_s - wall_s) * 1e3,
-             clock.realtime_priority() ? "SCHED_FIFO" : "normal priority: no CAP_SYS_NICE");
+  fmt::print(
+      "realtime 1 kHz, stornoway, rig at 100 Hz       {:8} ticks over {:.1f} s  jitter "
+      "p50 {:.0f} us  p99 {:.0f} us  max {:.0f} us  late>1 tick {}  plant-wall {:+.1f} ms "
+      "({})\n",
+      j.ticks, wall_s, j.p50_us, j.p99_us, j.max_us, j.late_over_1_tick, (plant_s - wall_s) * 1e3,
+      clock.realtime_priority() ? "SCHED_FIFO" : "normal priority: no CAP_SYS_NICE");
 }
 
 }  // namespace
@@ -87,14 +90,15 @@ int main(int argc, char** argv) {
   const auto here = std::filesystem::absolute(argv[0]).parent_path();
   std::string plantsim = (here / "plantsim").string();
   std::string linear = (here.parent_path() / "tests" / "plantsim_linear").string();
-  app.add_option("--exchanges", exchanges, "Lockstep exchanges per measurement")->default_str("2000");
+  app.add_option("--exchanges", exchanges, "Lockstep exchanges per measurement")
+      ->default_str("2000");
   app.add_option("--jitter-s", jitter_s, "Realtime jitter measurement, seconds (0: skip)")
       ->default_str("60");
   app.add_option("--plantsim", plantsim, "plantsim executable");
   CLI11_PARSE(app, argc, argv);
   try {
     fmt::print("bench_serve: {} lockstep exchanges of 10 ticks x 1 ms (100 Hz rig)\n", exchanges);
-    print("lockstep modbus tcp, stornoway (plantsim)", 
+    print("lockstep modbus tcp, stornoway (plantsim)",
           plantsim::bench::modbus_lockstep(plantsim, {"--seed", "1"}, exchanges));
     if (std::filesystem::exists(linear)) {
       print("lockstep modbus tcp, linear plant (reference)",

@@ -10,7 +10,7 @@ struct ExchangeFigures {
   int exchanges = 0;
   double wall_s = 0.0;
   double simulated_s = 0.0;
-  double p50_us = 0.0;   // one exchange (write, advance, read) round trip
+  double p50_us = 0.0;  // one exchange (write, advance, read) round trip
   double p99_us = 0.0;
   double sim_per_wall() const { return wall_s > 0 ? simulated_s / wall_s : 0.0; }
 };

@@ -48,9 +48,10 @@ std::int16_t echo_after_one_tick(drivers::can::CanEndpoint& ep, modbus_t* mb) {
 }
 
 TEST(CanUdp, LockstepFramesCommandsAndRejectedFrames) {
-  auto s = start_served(linear_program(), {"--modbus", "tcp://127.0.0.1:0", "--can",
-                                           "udp://127.0.0.1:0", "--clock", "lockstep"},
-                        true, true);
+  auto s = start_served(
+      linear_program(),
+      {"--modbus", "tcp://127.0.0.1:0", "--can", "udp://127.0.0.1:0", "--clock", "lockstep"}, true,
+      true);
   ASSERT_GT(s.can_port, 0);
   auto ep = can_client(s.can_port);
   auto mb = connect_tcp(s.modbus_port);

@@ -32,8 +32,8 @@ Outcome run_to_end(std::vector<std::string> args, const std::string& program = l
 void expect_usage_error(const std::vector<std::string>& args, const std::string& names) {
   const auto o = run_to_end(args);
   EXPECT_EQ(o.exit_code, 2) << o.err;
-  EXPECT_NE(o.err.find(names), std::string::npos) << "message should name '" << names << "': "
-                                                  << o.err;
+  EXPECT_NE(o.err.find(names), std::string::npos)
+      << "message should name '" << names << "': " << o.err;
   EXPECT_EQ(std::count(o.err.begin(), o.err.end(), '\n'), 1) << "one line: " << o.err;
   EXPECT_EQ(o.out.find("ready"), std::string::npos) << "nothing may start: " << o.out;
 }
@@ -83,8 +83,7 @@ TEST(PlantsimCli, PortInUseExitsTwoAndNamesThePort) {
   len = sizeof uaddr;
   getsockname(udp, reinterpret_cast<sockaddr*>(&uaddr), &len);
   const std::string uport = std::to_string(ntohs(uaddr.sin_port));
-  expect_usage_error({"--modbus", "tcp://127.0.0.1:0", "--can", "udp://127.0.0.1:" + uport},
-                     uport);
+  expect_usage_error({"--modbus", "tcp://127.0.0.1:0", "--can", "udp://127.0.0.1:" + uport}, uport);
   close(udp);
   close(fd);
 }
@@ -97,8 +96,9 @@ TEST(PlantsimCli, SocketcanUnavailableIsAConfigError) {
 
 TEST(PlantsimCli, SigtermAndSigintExitZero) {
   for (const int sig : {SIGTERM, SIGINT}) {
-    auto s = start_served(linear_program(), {"--modbus", "tcp://127.0.0.1:0", "--can",
-                                             "udp://127.0.0.1:0"}, true, true);
+    auto s =
+        start_served(linear_program(),
+                     {"--modbus", "tcp://127.0.0.1:0", "--can", "udp://127.0.0.1:0"}, true, true);
     ASSERT_GT(s.modbus_port, 0);
     auto ctx = connect_tcp(s.modbus_port);  // a connected client must not delay the exit
     ASSERT_TRUE(ctx);

@@ -57,9 +57,9 @@ TEST(ExternalClients, MbpollWritesBiasAndReadsInputRegisters) {
   ASSERT_EQ(values.size(), 10u) << r.output;
   EXPECT_EQ(values.at(map::kInBiasEcho), 1750);
   EXPECT_EQ(values.at(map::kInCounter), 25);
-  EXPECT_EQ(values.at(map::kInTimeLo), 25);        // plant time 25 ms
-  EXPECT_EQ(values.at(map::kInFreq), 50000);       // 50.000 Hz
-  EXPECT_EQ(values.at(map::kInSpeed), 6000);       // 600.0 rpm
+  EXPECT_EQ(values.at(map::kInTimeLo), 25);   // plant time 25 ms
+  EXPECT_EQ(values.at(map::kInFreq), 50000);  // 50.000 Hz
+  EXPECT_EQ(values.at(map::kInSpeed), 6000);  // 600.0 rpm
   // An illegal address is reported by mbpoll as the server's exception.
   auto bad = run_command(base + " -t 3 -r 10 -c 1 127.0.0.1");
   EXPECT_NE(bad.output.find("Illegal data address"), std::string::npos) << bad.output;

@@ -1,8 +1,8 @@
 #include "tests/integration/serve/linear_plant.hpp"
 
-#include <cmath>
-
 #include <fmt/format.h>
+
+#include <cmath>
 
 namespace plantsim::testing {
 
@@ -59,12 +59,12 @@ void LinearPlant::update_measurement() {
 
 std::unique_ptr<Plant> make_linear_plant(const PlantOptions& options) {
   if (options.config) {
-    throw ConfigError(fmt::format("{}: the linear test plant takes no config file",
-                                  options.config->string()));
+    throw ConfigError(
+        fmt::format("{}: the linear test plant takes no config file", options.config->string()));
   }
   if (options.preset != "linear" && options.preset != "stornoway") {
-    throw ConfigError(fmt::format("--preset '{}': unknown preset (expected linear)",
-                                  options.preset));
+    throw ConfigError(
+        fmt::format("--preset '{}': unknown preset (expected linear)", options.preset));
   }
   LinearPlantOptions o;
   o.seed = options.seed;

@@ -19,10 +19,10 @@ namespace plantsim::testing {
 struct LinearPlantOptions {
   double rated_power_w = 4.6e6;
   double operating_power_w = 3.5e6;
-  double gain = 1.0;        // K, % power per % bias
+  double gain = 1.0;  // K, % power per % bias
   double fn_hz = 2.0;
   double zeta = 0.1;
-  double noise_w = 500.0;   // standard deviation of the measurement noise
+  double noise_w = 500.0;  // standard deviation of the measurement noise
   std::uint64_t seed = 1;
   std::chrono::nanoseconds tick = std::chrono::milliseconds(1);
 };

@@ -23,8 +23,8 @@ struct PtyPair {
 
 PtyPair open_pty_pair() {
   PtyPair p;
-  p.socat = std::make_unique<ChildProcess>(std::vector<std::string>{
-      "/usr/bin/socat", "-d", "-d", "pty,raw,echo=0", "pty,raw,echo=0"});
+  p.socat = std::make_unique<ChildProcess>(
+      std::vector<std::string>{"/usr/bin/socat", "-d", "-d", "pty,raw,echo=0", "pty,raw,echo=0"});
   const std::regex pty(R"(PTY is (\S+))");
   const auto deadline = std::chrono::steady_clock::now() + 10s;
   while (std::chrono::steady_clock::now() < deadline) {
@@ -105,8 +105,10 @@ TEST(ModbusRtu, ServesThroughAPtyPairAndSurvivesNoise) {
 
   // Debian's mbpoll as the RTU master.
   if (std::filesystem::exists("/usr/bin/mbpoll")) {
-    const std::string cmd = "timeout 10 mbpoll -m rtu -b 19200 -P none -a 1 -0 -1 -o 2 -t 3 -r 9 "
-                            "-c 1 " + pty.b + " 2>&1";
+    const std::string cmd =
+        "timeout 10 mbpoll -m rtu -b 19200 -P none -a 1 -0 -1 -o 2 -t 3 -r 9 "
+        "-c 1 " +
+        pty.b + " 2>&1";
     FILE* pipe = popen(cmd.c_str(), "r");
     ASSERT_NE(pipe, nullptr);
     std::string out;

@@ -193,8 +193,8 @@ TEST(ModbusTcp, GarbageAndStalledClientsDoNotStopTheServer) {
 
 TEST(ModbusTcp, LockstepIsDeterministicForASeed) {
   auto run = [](const std::string& seed) {
-    auto s = start_served(linear_program(), {"--modbus", "tcp://127.0.0.1:0", "--clock",
-                                             "lockstep", "--seed", seed});
+    auto s = start_served(linear_program(),
+                          {"--modbus", "tcp://127.0.0.1:0", "--clock", "lockstep", "--seed", seed});
     auto ctx = connect_tcp(s.modbus_port);
     EXPECT_TRUE(ctx);
     return ctx ? scripted_exchange(ctx.get(), 300) : std::vector<std::uint16_t>{};

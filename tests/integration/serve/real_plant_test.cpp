@@ -3,7 +3,6 @@
 // external client. Skipped when the executable has not been built.
 #include <cmath>
 #include <fstream>
-
 #include <nlohmann/json.hpp>
 
 #include "tests/integration/serve/serve_fixture.hpp"
@@ -13,7 +12,7 @@ namespace {
 
 namespace map = drivers::modbus_map;
 
-#define REQUIRE_REAL_PLANTSIM()                                                       \
+#define REQUIRE_REAL_PLANTSIM() \
   if (!real_program_exists()) GTEST_SKIP() << real_program() << " has not been built"
 
 // Mean electrical power (W) over `exchanges` lockstep exchanges of 10 ticks at `bias`.
@@ -30,7 +29,8 @@ double mean_power_w(modbus_t* ctx, std::int16_t bias, int exchanges, std::uint16
 // DC gain of the preset's model file, kW per % bias: num(0)/den(0).
 std::optional<double> model_dc_gain_kw_per_pct() {
   const char* src = std::getenv("RIG_SOURCE_DIR");
-  const auto path = std::filesystem::path(src ? src : ".") / "plantsim/presets/stornoway.tf.json";
+  const auto path = std::filesystem::path(src ? src : RIG_SOURCE_DIR_DEFAULT) /
+                    "plantsim/presets/stornoway.tf.json";
   std::ifstream in(path);
   if (!in) return std::nullopt;
   const auto model = nlohmann::json::parse(in);
@@ -64,8 +64,8 @@ TEST(RealPlant, BiasStepOverModbusLockstepMatchesModelDcGain) {
 TEST(RealPlant, LockstepIsDeterministicForASeed) {
   REQUIRE_REAL_PLANTSIM();
   auto run = [](const std::string& seed) {
-    auto s = start_served(real_program(), {"--modbus", "tcp://127.0.0.1:0", "--clock",
-                                           "lockstep", "--seed", seed});
+    auto s = start_served(real_program(),
+                          {"--modbus", "tcp://127.0.0.1:0", "--clock", "lockstep", "--seed", seed});
     auto ctx = connect_tcp(s.modbus_port);
     EXPECT_TRUE(ctx);
     return ctx ? scripted_exchange(ctx.get(), 300) : std::vector<std::uint16_t>{};

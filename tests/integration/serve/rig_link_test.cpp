@@ -67,11 +67,10 @@ TEST(RigLink, ModbusTcpLinkAgainstPlantsim) {
 }
 
 TEST(RigLink, CanUdpLinkAgainstPlantsim) {
-  auto s = start_served(program(), {"--can", "udp://127.0.0.1:0", "--clock", "lockstep"}, false,
-                        true);
+  auto s =
+      start_served(program(), {"--can", "udp://127.0.0.1:0", "--clock", "lockstep"}, false, true);
   ASSERT_GT(s.can_port, 0);
-  expect_step_response(run_link("can+udp://127.0.0.1:" + std::to_string(s.can_port), 300),
-                       "can");
+  expect_step_response(run_link("can+udp://127.0.0.1:" + std::to_string(s.can_port), 300), "can");
 }
 
 }  // namespace
