@@ -184,7 +184,7 @@ IdentifyResult identify(const Eigen::VectorXd& u_raw, const Eigen::VectorXd& y_r
   const signal::CorrelatorOptions co = correlator_for(opt, dt_s);
   res.ruu = signal::auto_correlation(u, co);
   res.ryu = signal::cross_correlation(y, u, co);
-  res.model_ryu = model_cross_correlation(res.model, res.ruu);
+  res.model_ryu = model_cross_correlation(res.model, res.ruu, res.ryu);
   if (opt.method == IdentMethod::kMmfm && opt.blocks >= 3 &&
       u.size() / opt.blocks >= 4 * opt.correlator.lags) {
     MmfmOptions fixed = opt.mmfm;

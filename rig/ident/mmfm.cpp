@@ -92,7 +92,7 @@ double delay_std_from_curvature(Evaluator& ev, const MmfmResult& best) {
   auto v_at = [&](double td) {
     const MmfmResult r = ev.at(std::max(0.0, td));
     return (ev.ryu.r - r.model_ryu.r).squaredNorm();
-  };
+  };  // model_ryu includes the fitted initial transient
   const double v0 = (ev.ryu.r - best.model_ryu.r).squaredNorm();
   const double td = std::max(best.delay_s, h);
   const double vpp = (v_at(td + h) - 2.0 * v_at(td) + v_at(td - h)) / (h * h);

@@ -102,6 +102,14 @@ MmfmResult refine_correlation_output_error(const signal::Correlation& ruu,
 signal::Correlation model_cross_correlation(const TransferFunction& tf,
                                             const signal::Correlation& ruu);
 
+// Same, plus the free response that best explains r_yu: r_uu is not zero before the window
+// (a finite record's autocorrelation has a noise floor), so the lsim starting at rest at the
+// first lag misses a transient that, for a lightly damped system, lasts the whole window.
+// Its n initial states are fitted by least squares. Used for every correlation-domain score.
+signal::Correlation model_cross_correlation(const TransferFunction& tf,
+                                            const signal::Correlation& ruu,
+                                            const signal::Correlation& ryu);
+
 // Half-width (s) of the support of the functions of `settings` for the given order.
 double support_half_width_s(ModelOrder order, const MmfmSettings& settings);
 

@@ -5,6 +5,7 @@
 #include <string>
 #include <utility>
 
+#include <Eigen/QR>
 #include <Eigen/SVD>
 
 #include "rig/ident/mmfm.hpp"
@@ -145,6 +146,17 @@ signal::Correlation model_cross_correlation(const TransferFunction& tf,
   return out;
 }
 
+signal::Correlation model_cross_correlation(const TransferFunction& tf,
+                                            const signal::Correlation& ruu,
+                                            const signal::Correlation& ryu) {
+  signal::Correlation out = model_cross_correlation(tf, ruu);
+  const Eigen::MatrixXd basis = free_response_basis(tf, ruu.size(), ruu.dt_s);
+  if (basis.cols() == 0 || !out.r.allFinite()) return out;
+  const Eigen::VectorXd x0 = basis.colPivHouseholderQr().solve(ryu.r - out.r);
+  out.r += basis * x0;
+  return out;
+}
+
 MmfmResult mmfm_solve(const signal::Correlation& ruu, const signal::Correlation& ryu,
                       ModelOrder order, double delay_s, const MmfmSettings& st) {
   check_axes(ruu, ryu);
@@ -204,7 +216,7 @@ MmfmResult mmfm_solve(const signal::Correlation& ruu, const signal::Correlation&
   res.equations = static_cast<int>(rows);
   res.equation_residual = e.norm() / std::max(1e-300, mt.col(ref).norm());
   res.settings = st;
-  res.model_ryu = model_cross_correlation(res.model, ruu);
+  res.model_ryu = model_cross_correlation(res.model, ruu, ryu);
   res.correlation_fit_pct = fit_percent(ryu.r, res.model_ryu.r);
   res.derived = derived_figures(res.model, res.covariance);
   res.parameters = parameter_table(res.model, res.covariance, res.delay_std_s);

@@ -5,6 +5,7 @@
 
 #include <Eigen/Cholesky>
 #include <Eigen/LU>
+#include <Eigen/QR>
 
 #include "rig/ident/mmfm.hpp"
 #include "rig/ident/srivc.hpp"
@@ -21,11 +22,24 @@ TransferFunction from_theta(const Eigen::VectorXd& th, int n, int m, double dela
   return tf;
 }
 
+// Residual with the best initial-state transient removed (see model_cross_correlation).
 double sse_of(const TransferFunction& tf, const signal::Correlation& ruu,
               const signal::Correlation& ryu) {
   if (!tf.is_stable() || tf.delay_s < 0.0) return std::numeric_limits<double>::infinity();
-  const double v = (ryu.r - simulate(tf, ruu.r, ruu.dt_s)).squaredNorm();
+  const double v = (ryu.r - model_cross_correlation(tf, ruu, ryu).r).squaredNorm();
   return std::isfinite(v) ? v : std::numeric_limits<double>::infinity();
+}
+
+// Orthonormal basis Q of the free responses of tf; x - Q Q^T x projects the initial-state
+// transient out (variable projection, the basis' own dependence on theta neglected).
+Eigen::MatrixXd transient_basis(const TransferFunction& tf, Eigen::Index samples, double dt_s) {
+  const Eigen::MatrixXd basis = free_response_basis(tf, samples, dt_s);
+  Eigen::HouseholderQR<Eigen::MatrixXd> qr(basis);
+  return qr.householderQ() * Eigen::MatrixXd::Identity(samples, basis.cols());
+}
+
+Eigen::MatrixXd project_out(const Eigen::MatrixXd& q, const Eigen::MatrixXd& x) {
+  return x - q * (q.transpose() * x);
 }
 
 }  // namespace
@@ -43,8 +57,9 @@ MmfmResult refine_correlation_output_error(const signal::Correlation& ruu,
   Eigen::MatrixXd jtj;
   for (int it = 0; it < 50; ++it) {
     const TransferFunction tf = from_theta(th, n, m, th(n + m + 1));
-    const Eigen::VectorXd e = ryu.r - simulate(tf, ruu.r, ruu.dt_s);
-    const Eigen::MatrixXd j = output_sensitivities(tf, ruu.r, ruu.dt_s).leftCols(p);
+    const Eigen::MatrixXd q = transient_basis(tf, ryu.size(), ryu.dt_s);
+    const Eigen::VectorXd e = project_out(q, ryu.r - simulate(tf, ruu.r, ruu.dt_s));
+    const Eigen::MatrixXd j = project_out(q, output_sensitivities(tf, ruu.r, ruu.dt_s).leftCols(p));
     jtj = j.transpose() * j;
     const Eigen::VectorXd g = j.transpose() * e;
     bool accepted = false;
@@ -68,7 +83,8 @@ MmfmResult refine_correlation_output_error(const signal::Correlation& ruu,
   }
   MmfmResult res = start;
   const TransferFunction tf = from_theta(th, n, m, th(n + m + 1));
-  const Eigen::MatrixXd j = output_sensitivities(tf, ruu.r, ruu.dt_s).leftCols(p);
+  const Eigen::MatrixXd j = project_out(transient_basis(tf, ryu.size(), ryu.dt_s),
+                                        output_sensitivities(tf, ruu.r, ruu.dt_s).leftCols(p));
   const double s2 = v / std::max<double>(1.0, static_cast<double>(ryu.size() - p));
   const Eigen::MatrixXd cov_p = s2 * (j.transpose() * j).inverse();
   // Covariance on theta = [a_n..a_0, b_m..b_0] (a_n = 1 fixed), then the caller's normalisation.
@@ -78,7 +94,7 @@ MmfmResult refine_correlation_output_error(const signal::Correlation& ruu,
   res.covariance = cov;
   res.delay_s = tf.delay_s;
   if (delay_free) res.delay_std_s = std::sqrt(std::max(0.0, cov_p(p - 1, p - 1)));
-  res.model_ryu = model_cross_correlation(res.model, ruu);
+  res.model_ryu = model_cross_correlation(res.model, ruu, ryu);
   res.correlation_fit_pct = fit_percent(ryu.r, res.model_ryu.r);
   res.derived = derived_figures(res.model, res.covariance);
   res.parameters = parameter_table(res.model, res.covariance, res.delay_std_s);

@@ -147,9 +147,9 @@ FixedDelayFit search_delay(const Eigen::VectorXd& u, const Eigen::VectorXd& y, d
                            ModelOrder order, const Eigen::VectorXd& a_start, FixedDelayFit best,
                            const SrivcOptions& opt) {
   SrivcOptions quick = opt;
-  quick.max_iterations = std::min(opt.max_iterations, 6);
+  quick.max_iterations = std::min(opt.max_iterations, 4);
   quick.tolerance = std::max(opt.tolerance, 1e-5);
-  const int grid = std::max(3, std::min(12, static_cast<int>(opt.max_delay_s / dt_s) + 1));
+  const int grid = std::max(3, std::min(8, static_cast<int>(opt.max_delay_s / dt_s) + 1));
   const double step = opt.max_delay_s / (grid - 1);
   int best_i = 0;
   for (int i = 1; i < grid; ++i) {

@@ -150,7 +150,8 @@ Eigen::MatrixXd filtered_derivatives(const Eigen::VectorXd& den_in, const Eigen:
       out(k, i + 1) = x[static_cast<size_t>(i)];
     }
     out(k, 0) = top;
-    const double v2 = ud(k + 1);
+    // Left limit at t_{k+1}: the delayed input is still 0 there when it starts at t_{k+1}.
+    const double v2 = (f == 0.0 && k + 1 - d <= 0) ? 0.0 : ud(k + 1);
     if (f == 0.0) {
       apply(p_full, full, x, t, v0, (v2 - v0) / dt_s);
       x.swap(t);
@@ -160,6 +161,28 @@ Eigen::MatrixXd filtered_derivatives(const Eigen::VectorXd& den_in, const Eigen:
       apply(p1, s1, x, t, v0, (v1l - v0) / (f * dt_s));
       apply(p2, s2, t, x, v1, (v2 - v1) / ((1.0 - f) * dt_s));
     }
+  }
+  return out;
+}
+
+Eigen::MatrixXd free_response_basis(const TransferFunction& tf_in, Eigen::Index samples,
+                                    double dt_s) {
+  const TransferFunction tf = monic(tf_in);
+  const Eigen::Index n = tf.den.size() - 1;
+  Eigen::MatrixXd out(samples, n);
+  if (n == 0) return out;
+  Eigen::VectorXd b = Eigen::VectorXd::Zero(n + 1);
+  b.tail(tf.num.size()) = tf.num;
+  // y = sum_{i<n} (b_i - b_n a_i) p^i z for zero input, states x = [p^{n-1} z .. z].
+  const Eigen::RowVectorXd c = (b.tail(n) - b(0) * tf.den.tail(n)).transpose();
+  Eigen::MatrixXd a = Eigen::MatrixXd::Zero(n, n);
+  a.row(0) = -tf.den.tail(n).transpose();
+  for (Eigen::Index i = 1; i < n; ++i) a(i, i - 1) = 1.0;
+  const Eigen::MatrixXd phi = (a * dt_s).exp();
+  Eigen::MatrixXd x = Eigen::MatrixXd::Identity(n, n);
+  for (Eigen::Index k = 0; k < samples; ++k) {
+    out.row(k) = c * x;
+    x = phi * x;
   }
   return out;
 }

@@ -60,6 +60,11 @@ Eigen::VectorXd simulate(const TransferFunction& tf, const Eigen::VectorXd& u, d
 Eigen::MatrixXd filtered_derivatives(const Eigen::VectorXd& den, const Eigen::VectorXd& u,
                                      double dt_s, double delay_s);
 
+// Free (zero-input) responses of tf from the unit initial states of its controllable form,
+// one column each (n columns): they span every initial-condition transient of the system.
+Eigen::MatrixXd free_response_basis(const TransferFunction& tf, Eigen::Index samples,
+                                    double dt_s);
+
 // NRMSE fit in %: 100 (1 - |y - yhat| / |y - mean(y)|) (MATLAB compare, DESIGN.md 5).
 double fit_percent(const Eigen::VectorXd& y, const Eigen::VectorXd& yhat);
 

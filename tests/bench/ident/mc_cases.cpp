@@ -88,6 +88,19 @@ void stornoway_mc(const McConfig& cfg) {
       s.add(res.derived, res.delay_s, res.delay_std_s);
     });
     const CramerRaoBound b = cramer_rao_bound(tf, rec.u, rec.dt_s, rec.noise_variance);
+    if (cfg.csv) {
+      const auto seed = static_cast<unsigned long long>(cfg.seed + r);
+      for (const auto& [name, s] : {std::pair<const char*, Series*>{"mmfm", &mm},
+                                    {"mmfm_oe", &oe}, {"srivc", &sr}, {"crlb_std", nullptr}}) {
+        if (s && s->fn.size() != static_cast<size_t>(r + 1 - s->failures)) continue;
+        if (s) std::fprintf(cfg.csv, "stornoway,%d,%llu,%s,%.9g,%.9g,%.9g,%.9g\n", r, seed, name,
+                            s->fn.back(), s->zeta.back(), s->gain.back(), s->td.back());
+        else std::fprintf(cfg.csv, "stornoway,%d,%llu,%s,%.9g,%.9g,%.9g,%.9g\n", r, seed, name,
+                          b.derived.fn_hz_std, b.derived.zeta_std, b.derived.gain_std,
+                          b.std_dev(b.std_dev.size() - 1));
+      }
+      std::fflush(cfg.csv);
+    }
     crlb_fn.push_back(b.derived.fn_hz_std), crlb_zeta.push_back(b.derived.zeta_std);
     crlb_gain.push_back(b.derived.gain_std), crlb_td.push_back(b.std_dev(b.std_dev.size() - 1));
   }

@@ -1,6 +1,7 @@
 #pragma once
 
 #include <cstdint>
+#include <cstdio>
 
 namespace rig::ident::bench {
 
@@ -9,6 +10,7 @@ struct McConfig {
   std::uint64_t seed = 1;
   double minutes = 10.0;
   int lags = 512;
+  std::FILE* csv = nullptr;  // per-run values (case,run,seed,method,fn_hz,zeta,gain,delay_s)
 };
 
 void noise_free_table();

@@ -1,6 +1,6 @@
 // Monte Carlo and thesis-reproduction tables for the identification methods.
 //   bench_ident_mc --case stornoway|rao|thesis513|noisefree|orders|all --runs N --seed S
-//                  [--minutes M] [--lags L]
+//                  [--minutes M] [--lags L] [--csv FILE]
 // Every table prints the seed; run r uses seed + r.
 #include <cstdio>
 #include <cstdlib>
@@ -20,9 +20,10 @@ int main(int argc, char** argv) {
     else if (k == "--seed") cfg.seed = std::strtoull(v, nullptr, 10);
     else if (k == "--minutes") cfg.minutes = std::atof(v);
     else if (k == "--lags") cfg.lags = std::atoi(v);
+    else if (k == "--csv") cfg.csv = std::fopen(v, "w");
     else {
       std::fprintf(stderr, "bench_ident_mc: unknown option %s (expected --case, --runs, "
-                           "--seed, --minutes, --lags)\n", k.c_str());
+                           "--seed, --minutes, --lags, --csv)\n", k.c_str());
       return 2;
     }
   }
@@ -31,5 +32,6 @@ int main(int argc, char** argv) {
   if (which == "stornoway" || which == "all") rig::ident::bench::stornoway_mc(cfg);
   if (which == "rao" || which == "all") rig::ident::bench::rao_garnier_mc(cfg);
   if (which == "orders" || which == "all") rig::ident::bench::order_tables(cfg);
+  if (cfg.csv) std::fclose(cfg.csv);
   return 0;
 }
