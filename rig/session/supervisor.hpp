@@ -83,7 +83,7 @@ struct BackoffConfig {
   double peak_to_rms = 4.0;          // response peak / rms: 4 for Gaussian noise excitation,
                                      // ~2 for a sine (sqrt 2 and margin); 0 disables the cap
   double rms_time_constant_s = 2.0;  // averaging of the variance and mean squares
-  double statistics_hold_s = 20.0;   // release of the held request mean square
+  double statistics_hold_s = 20.0;   // release of the held gain g^2 and request ms(r)
 };
 
 // The back-off envelope of (2) above, one sample at a time.
