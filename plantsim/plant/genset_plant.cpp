@@ -42,7 +42,8 @@ GensetPlant::GensetPlant(const Params& params, std::vector<TimedChange> changes,
   transducer_.reset(x0[GensetModel::kMeas]);
   model_.set_delay_line(delay_.get());
   model_.set_split_bias_path(linear_setpoint_path(params));
-  solver_ = std::make_unique<CvodeSolver>(model_, 0.0, x0, solver_options(params));
+  x_ = x0;
+  restart_solver(0.0);
   reconfigure();
   while (next_change_ < changes_.size() && changes_[next_change_].time_s <= 0.0) {
     apply(changes_[next_change_++]);
@@ -50,9 +51,15 @@ GensetPlant::GensetPlant(const Params& params, std::vector<TimedChange> changes,
   update_measurement();
 }
 
+void GensetPlant::restart_solver(double t_s) {
+  model_.set_frozen(x_);
+  const int n = GensetModel::active_size(model_.params());
+  solver_ = std::make_unique<CvodeSolver>(model_, t_s, x_.head(n), solver_options(model_.params()));
+}
+
 void GensetPlant::reconfigure() {
   bias_path_.configure(model_.params(), dt_s_);
-  const Eigen::VectorXd& x = solver_->state();
+  const Eigen::VectorXd& x = x_;
   ripple_.configure(model_.params(), [&](std::complex<double> s) {
     return model_.torque_to_measured_power(x.data(), s);
   });
@@ -60,17 +67,17 @@ void GensetPlant::reconfigure() {
 
 void GensetPlant::apply(const TimedChange& change) {
   model_.mutable_params().set(change.param, change.value, "--fault '" + change.text + "'");
-  Eigen::VectorXd x = solver_->state();
   const bool split = linear_setpoint_path(model_.params());
   if (model_.split_bias_path() && !split) {
     // Superposition undone: the ODE's governor states become the sums, the bias enters e.
-    x.segment<BiasPath::kStates>(GensetModel::kGov + Degov1::kZ1) += bias_path_.state();
+    x_.segment<BiasPath::kStates>(GensetModel::kGov + Degov1::kZ1) += bias_path_.state();
     bias_path_.reset();
   }
   model_.set_split_bias_path(split);
   reconfigure();
-  // A parameter step makes the right-hand side discontinuous: restart the multistep history.
-  solver_->reinit(solver_->time(), x);
+  // A parameter step makes the right-hand side discontinuous (and may change the active
+  // states or the tolerances): restart CVODE from the state at the change.
+  restart_solver(solver_->time());
 }
 
 void GensetPlant::advance_bias_path(double duration_s) {
@@ -109,11 +116,13 @@ bool GensetPlant::advance_solver(double t_now, double t_end) {
     while (next_change_ < changes_.size() && changes_[next_change_].time_s <= t_end) {
       const double t_change = std::max(changes_[next_change_].time_s, t_now);
       solver_->advance_to(t_change, horizon);
+      sync_state();
       advance_bias_path(t_change - t_seg);
       t_seg = t_change;
       apply(changes_[next_change_++]);
     }
     solver_->advance_to(t_end, horizon);
+    sync_state();
   } catch (const SolverError& e) {
     error_ = e.what();
     return false;
@@ -131,7 +140,7 @@ void GensetPlant::step() {
     return;
   }
   ++ticks_;
-  const Eigen::VectorXd& x = solver_->state();
+  const Eigen::VectorXd& x = x_;
   const Params& p = model_.params();
   const double xf_ode = Degov1::actuator_pu(x.data() + GensetModel::kGov);
   actuator_pu_ = xf_ode;
@@ -148,11 +157,11 @@ void GensetPlant::step() {
 }
 
 double GensetPlant::electrical_power_kw() const {
-  return model_.electrical_power_pu(solver_->state().data()) * model_.params()[P::kRatedKw];
+  return model_.electrical_power_pu(x_.data()) * model_.params()[P::kRatedKw];
 }
 
 void GensetPlant::update_measurement() {
-  const Eigen::VectorXd& x = solver_->state();
+  const Eigen::VectorXd& x = x_;
   const Params& p = model_.params();
   const double t = static_cast<double>(ticks_) * dt_s_;
   const double dw = x[GensetModel::kAlt + Alternator::kDw];

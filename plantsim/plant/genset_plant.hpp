@@ -29,7 +29,7 @@ class GensetPlant : public Plant {
 
   // Beyond the Plant interface (tests, benchmarks, linearisation checks).
   double time_s() const { return solver_->time(); }
-  const Eigen::VectorXd& state() const { return solver_->state(); }
+  const Eigen::VectorXd& state() const { return x_; }  // full GensetModel layout
   const Params& params() const { return model_.params(); }
   double electrical_power_kw() const;  // true Pe, before the measurement chain
   double rack_pu() const { return backlash_.rack_pu(); }
@@ -43,6 +43,8 @@ class GensetPlant : public Plant {
   void reconfigure();
   void update_measurement();
   void advance_bias_path(double duration_s);
+  void sync_state() { x_.head(solver_->state().size()) = solver_->state(); }
+  void restart_solver(double t_s);
   bool advance_solver(double t_now, double t_end);
 
   GensetModel model_;
@@ -50,6 +52,7 @@ class GensetPlant : public Plant {
   double dt_s_;
   std::unique_ptr<FuelDelayLine> delay_;
   std::unique_ptr<CvodeSolver> solver_;
+  Eigen::VectorXd x_;  // full state at the last output time
   Backlash backlash_;
   BiasPath bias_path_;
   TransducerLag transducer_;

@@ -39,20 +39,21 @@ void GensetModel::rhs(const double* x, double bias_pu, double fuel_delayed_pu, d
   dx[kMeas] = (pe - x[kMeas]) / p_[P::kMeasLag];
 }
 
+void GensetModel::set_frozen(const Eigen::VectorXd& full) {
+  full_x_ = full;
+  active_ = active_size(p_);
+}
+
 bool GensetModel::derivatives(double t, const double* x, double* dx) {
   const double fuel = delay_->at(t - dead_time_s(p_));
+  full_x_.head(active_) = Eigen::Map<const Eigen::VectorXd>(x, active_);
   if (split_) {
-    rhs(x, 0.0, fuel, dx, false);
+    rhs(full_x_.data(), 0.0, fuel, full_dx_.data(), false);
   } else {
-    rhs(x, bias_pu_, fuel, dx);
+    rhs(full_x_.data(), bias_pu_, fuel, full_dx_.data());
   }
-  // The transducer lag runs per tick on the output (TransducerLag); its ODE state is frozen
-  // here so that CVODE's step size is set by the plant, not by a 3 ms filter on its output.
-  dx[kMeas] = 0.0;
-  for (int i = 0; i < kSize; ++i) {
-    if (!std::isfinite(dx[i])) return false;
-  }
-  return true;
+  Eigen::Map<Eigen::VectorXd>(dx, active_) = full_dx_.head(active_);
+  return full_dx_.head(active_).allFinite();
 }
 
 std::complex<double> GensetModel::torque_to_measured_power(const double* x,

@@ -2,7 +2,10 @@
 // vector for CVODE. Inputs that are piecewise constant per tick (bias) or come from the
 // history buffer (delayed fuel) are members set between solver calls.
 //
-// State layout: [Degov1 (6) | Engine (2) | Alternator (4) | transducer lag (1)].
+// State layout: [Degov1 (6) | Engine (2) | Alternator (4) | transducer lag (1)]. CVODE
+// integrates only the leading active_size() states: E' and Efd are constants without flux
+// decay, and the transducer lag runs per tick on the output (TransducerLag), so the frozen
+// tail is held here and a smaller dense system is factorised at every Newton setup.
 #pragma once
 
 #include <Eigen/Core>
@@ -29,7 +32,12 @@ class GensetModel : public OdeSystem {
   // Steady state at op.power_kw; validates limits (ConfigError). Returns the rack position.
   Eigen::VectorXd steady_state(double* rack0_pu);
 
-  int size() const override { return kSize; }
+  static int active_size(const Params& p) {
+    return p[P::kAltFluxDecay] > 0.5 ? kMeas : kAlt + Alternator::kEq;
+  }
+  // Full state whose tail beyond active_size() stays frozen; sets the active size.
+  void set_frozen(const Eigen::VectorXd& full);
+  int size() const override { return active_; }
   bool derivatives(double t, const double* x, double* dx) override;
   // The right-hand side with explicit inputs (used by derivatives() and the linearisation).
   void rhs(const double* x, double bias_pu, double fuel_delayed_pu, double* dx,
@@ -58,6 +66,9 @@ class GensetModel : public OdeSystem {
   double bias_pu_ = 0.0;
   bool split_ = false;
   const FuelDelayLine* delay_ = nullptr;
+  int active_ = kSize;
+  Eigen::VectorXd full_x_ = Eigen::VectorXd::Zero(kSize);
+  Eigen::VectorXd full_dx_ = Eigen::VectorXd::Zero(kSize);
 };
 
 }  // namespace plantsim
