@@ -46,6 +46,36 @@ TEST(TransferFunction, DelayedStepThroughSecondOrderIsExact) {
   }
 }
 
+TEST(TransferFunction, FractionalDelayOfKinkedInputMatchesFineReference) {
+  // A random piecewise-linear input, delayed by integer and fractional sample counts, against
+  // the same input upsampled 50x (exact knots) and simulated at the fine step.
+  const Eigen::Index n = 300, up = 50;
+  const double dt = 0.01;
+  Eigen::VectorXd u(n);
+  double s = 0.3;
+  for (Eigen::Index i = 0; i < n; ++i) u(i) = s = std::fmod(s * 7.13 + 0.37, 2.0) - 1.0 + 0.5 * s;
+  Eigen::VectorXd fine((n - 1) * up + 1);
+  for (Eigen::Index i = 0; i + 1 < n; ++i)
+    for (Eigen::Index k = 0; k < up; ++k)
+      fine(i * up + k) = u(i) + (u(i + 1) - u(i)) * static_cast<double>(k) / up;
+  fine(fine.size() - 1) = u(n - 1);
+  for (double td : {0.06, 0.0637}) {
+    const TransferFunction tf = make_tf({1.0}, {0.07, 0.19, 11.05}, td);
+    const Eigen::VectorXd y = simulate(tf, u, dt), yf = simulate(tf, fine, dt / up);
+    double err = 0.0;
+    for (Eigen::Index i = 0; i < n; ++i) err = std::max(err, std::abs(y(i) - yf(i * up)));
+    EXPECT_LT(err, 1e-8 * y.cwiseAbs().maxCoeff() + 1e-12) << "td " << td;
+  }
+}
+
+TEST(TransferFunction, FreeResponseBasisSpansInitialTransients) {
+  // 1/(s+2): the single free response from x0 = 1 is e^{-2t}.
+  const Eigen::MatrixXd b = free_response_basis(make_tf({1.0}, {1.0, 2.0}), 50, 0.1);
+  ASSERT_EQ(b.cols(), 1);
+  for (Eigen::Index k = 0; k < 50; ++k) EXPECT_NEAR(b(k, 0), std::exp(-0.2 * k), 1e-12);
+  EXPECT_EQ(free_response_basis(make_tf({1.0}, {1.0, 2.0, 10.0}), 10, 0.1).cols(), 2);
+}
+
 TEST(TransferFunction, BiproperStepHasFeedthrough) {
   // (2s+1)/(s+1) = 2 - 1/(s+1): step response 1 + e^{-t}.
   const double dt = 0.05;
