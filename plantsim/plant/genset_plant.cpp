@@ -34,6 +34,17 @@ GensetPlant::GensetPlant(const Params& params, std::vector<TimedChange> changes,
   if (!(dt_s_ > 0.0 && dt_s_ <= 0.1)) {
     throw ConfigError(fmt::format("tick: {} s, expected 0 < tick <= 0.1 s", dt_s_));
   }
+  // The history buffer holds kMaxDeadTimeS: check the dead time now and after every change.
+  Params check = params;
+  for (std::size_t i = 0; i <= changes_.size(); ++i) {
+    if (dead_time_s(check) > kMaxDeadTimeS) {
+      throw ConfigError(fmt::format("engine: fuel dead time {:.3f} s{}, expected <= {} s",
+                                    dead_time_s(check),
+                                    i == 0 ? "" : " after --fault '" + changes_[i - 1].text + "'",
+                                    kMaxDeadTimeS));
+    }
+    if (i < changes_.size()) check.set(changes_[i].param, changes_[i].value, changes_[i].text);
+  }
   double rack0 = 0.0;
   const Eigen::VectorXd x0 = model_.steady_state(&rack0);
   delay_ = std::make_unique<FuelDelayLine>(dt_s_, kMaxDeadTimeS + dt_s_, rack0);

@@ -152,6 +152,19 @@ TEST(PlantSim, MakePlantValidatesOptions) {
   EXPECT_EQ(plant->rated_power_w(), 4.6e6);
 }
 
+TEST(PlantSim, DeadTimeBeyondTheHistoryIsAConfigError) {
+  try {
+    // 30/60 + 60/(2 * 60) = 1.0 s is still held; 1 cylinder at 60 rpm needs 1.5 s.
+    GensetPlant plant(preset("stornoway"),
+                      {parse_change("engine.cylinders=2@t=4"), parse_change("engine.rpm=60@t=5"),
+                       parse_change("engine.cylinders=1@t=6")},
+                      1, milliseconds(1));
+    FAIL() << "expected ConfigError";
+  } catch (const ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("engine.cylinders=1@t=6"), std::string::npos) << e.what();
+  }
+}
+
 TEST(PlantSim, ImpossibleOperatingPointIsAConfigError) {
   Params p = preset("stornoway");
   p.set(P::kPowerKw, 9000.0, "test");
