@@ -27,7 +27,7 @@ void apply_table(const toml::table& table, const std::string& block, const std::
     const auto id = find_param(name);
     if (!id || name.find('.') != name.rfind('.')) {
       throw ConfigError(
-          fmt::format("{}: unknown parameter '{}' (see plantsim/presets/stornoway.toml)", where, name));
+          fmt::format("{}: unknown parameter '{}' (plantsim --list-params shows them all)", where, name));
     }
     double value = 0.0;
     if (node.is_boolean()) {
