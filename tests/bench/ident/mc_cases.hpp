@@ -15,6 +15,7 @@ struct McConfig {
 
 void noise_free_table();
 void thesis_513_table();
+void zero_shift_table();
 void stornoway_mc(const McConfig& cfg);
 void rao_garnier_mc(const McConfig& cfg);
 void order_tables(const McConfig& cfg);

@@ -1,5 +1,5 @@
 // Monte Carlo and thesis-reproduction tables for the identification methods.
-//   bench_ident_mc --case stornoway|rao|thesis513|noisefree|orders|all --runs N --seed S
+//   bench_ident_mc --case stornoway|rao|thesis513|zeroshift|noisefree|orders|all --runs N --seed S
 //                  [--minutes M] [--lags L] [--csv FILE]
 // Every table prints the seed; run r uses seed + r.
 #include <cstdio>
@@ -28,6 +28,7 @@ int main(int argc, char** argv) {
     }
   }
   if (which == "noisefree" || which == "all") rig::ident::bench::noise_free_table();
+  if (which == "zeroshift" || which == "all") rig::ident::bench::zero_shift_table();
   if (which == "thesis513" || which == "all") rig::ident::bench::thesis_513_table();
   if (which == "stornoway" || which == "all") rig::ident::bench::stornoway_mc(cfg);
   if (which == "rao" || which == "all") rig::ident::bench::rao_garnier_mc(cfg);
