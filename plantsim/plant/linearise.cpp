@@ -102,14 +102,20 @@ void mode_of(LinearModel* lm) {
   }
 }
 
-// States whose derivative row is identically zero (E' and Efd without flux decay/AVR) are
-// constants of the linear model; dropping them keeps jw I - A invertible at w = 0.
+// States that do not move (derivative row identically zero: E' and Efd without flux decay)
+// or that act on nothing else (no off-diagonal column entry and not measured: the boost with
+// the MAP limiter inactive, the rotor angle when islanded) are dropped; they would only add
+// cancelling or singular modes (j w I - A must be invertible at w = 0).
 void drop_frozen_states(LinearModel* lm) {
   std::vector<int> keep;
-  for (int i = 0; i < lm->a.rows(); ++i) {
-    if (lm->a.row(i).cwiseAbs().maxCoeff() > 0.0 || lm->b[i] != 0.0 || lm->b_fuel[i] != 0.0) {
-      keep.push_back(i);
-    }
+  const Eigen::Index n = lm->a.rows();
+  for (Eigen::Index i = 0; i < n; ++i) {
+    const bool moves =
+        lm->a.row(i).cwiseAbs().maxCoeff() > 0.0 || lm->b[i] != 0.0 || lm->b_fuel[i] != 0.0;
+    Eigen::VectorXd col = lm->a.col(i).cwiseAbs();
+    col[i] = 0.0;
+    const bool acts = col.maxCoeff() > 0.0 || lm->c[i] != 0.0 || lm->c_fuel[i] != 0.0;
+    if (moves && acts) keep.push_back(static_cast<int>(i));
   }
   const auto k = static_cast<Eigen::Index>(keep.size());
   Eigen::MatrixXd a(k, k);

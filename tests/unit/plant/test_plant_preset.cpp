@@ -80,6 +80,20 @@ TEST(PlantPreset, RationalTfWithDelayMatchesExactLinearResponse) {
   }
 }
 
+TEST(PlantPreset, IslandedPresetLinearisesToAStableModel) {
+  PlantOptions o;
+  o.preset = "stornoway_island";
+  const LinearModel lm = linearise(o);
+  std::cout << "island: dc " << lm.dc_gain_kw_per_pct << " kW/%, fn " << lm.fn_hz << " Hz, zeta "
+            << lm.zeta << ", tf error " << lm.tf_max_error_db << " dB\n";
+  // Islanded, the load takes P_L0 (1 + D_L dw): the bias moves the speed, and with it the
+  // power, only through the load's frequency dependence, so the gain is far below 46 kW/%.
+  EXPECT_TRUE(std::isfinite(lm.dc_gain_kw_per_pct));
+  EXPECT_GT(lm.dc_gain_kw_per_pct, 0.0);
+  EXPECT_LT(lm.dc_gain_kw_per_pct, 46.0);
+  EXPECT_LT(lm.tf_max_error_db, 0.1);
+}
+
 TEST(PlantPreset, CommittedModelFileMatchesFreshLinearisation) {
   if (source_dir().empty()) GTEST_SKIP() << "RIG_SOURCE_DIR not set";
   std::ifstream in(source_dir() / "plantsim/presets/stornoway.tf.json");
