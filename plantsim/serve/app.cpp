@@ -124,6 +124,14 @@ int serve(const ServeOptions& o, const PlantHooks& hooks) {
   std::signal(SIGPIPE, SIG_IGN);  // a reader of --readout going away must not kill the plant
   Running r;
   try {
+    if (o.list_params) {
+      if (!hooks.list_params) {
+        std::cerr << "plantsim: --list-params is not available in this build\n";
+        return 2;
+      }
+      std::cout << hooks.list_params(o.plant) << std::flush;
+      return 0;
+    }
     if (o.linearise_to) {
       if (!hooks.linearise) {
         std::cerr << "plantsim: --linearise is not available in this build\n";
@@ -135,6 +143,9 @@ int serve(const ServeOptions& o, const PlantHooks& hooks) {
     r.governor = std::make_unique<Governor>(hooks.make_plant(o.plant));
     if (!open_endpoints(o, r)) return 2;
   } catch (const ConfigError& e) {
+    std::cerr << "plantsim: " << e.what() << "\n";
+    return 2;
+  } catch (const std::exception& e) {  // e.g. --linearise to an unwritable path
     std::cerr << "plantsim: " << e.what() << "\n";
     return 2;
   }

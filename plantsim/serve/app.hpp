@@ -23,6 +23,8 @@ struct PlantHooks {
   std::function<std::unique_ptr<Plant>(const PlantOptions&)> make_plant;
   // Writes the linearised transfer-function JSON; empty when this build cannot.
   std::function<void(const PlantOptions&, const std::filesystem::path&)> linearise;
+  // Every parameter of the resolved preset/config as commented plant TOML; empty if unknown.
+  std::function<std::string(const PlantOptions&)> list_params;
 };
 
 struct ServeOptions {
@@ -33,6 +35,7 @@ struct ServeOptions {
   std::optional<double> duration_s;  // stop at this plant time
   bool readout = false;
   std::optional<std::filesystem::path> linearise_to;
+  bool list_params = false;
 };
 
 // Returns the exit code.

@@ -30,6 +30,9 @@ void add_options(CLI::App& app, ServeOptions& o, std::string& clock, std::string
   app.add_option("--linearise", o.linearise_to,
                  "Write the linearised bias-to-power transfer function JSON and exit");
   app.add_flag("--readout", o.readout, "Print power, speed and bias once a second");
+  app.add_flag("--list-params", o.list_params,
+               "Print every plant parameter (of --preset/--config) as TOML with units and "
+               "ranges, and exit");
 }
 
 // Checks that CLI11 cannot express, each with a one-line message.

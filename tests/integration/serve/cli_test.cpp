@@ -6,36 +6,60 @@
 #include <sys/socket.h>
 #include <unistd.h>
 
+#include <fstream>
+
 #include "tests/integration/serve/serve_fixture.hpp"
 
 namespace plantsim::testing {
 namespace {
 
-struct Outcome {
-  int exit_code = -1;
-  std::string out;
-  std::string err;
-};
-
-Outcome run_to_end(std::vector<std::string> args, const std::string& program = linear_program()) {
-  args.insert(args.begin(), program);
-  ChildProcess p(args);
-  Outcome o;
-  const auto code = p.wait(10s);
-  EXPECT_TRUE(code) << "did not exit";
-  o.exit_code = code.value_or(-1);
-  while (auto line = p.read_line(10ms)) o.out += *line + "\n";
-  o.err = p.stderr_text(100ms);
-  return o;
-}
-
-void expect_usage_error(const std::vector<std::string>& args, const std::string& names) {
-  const auto o = run_to_end(args);
+void expect_usage_error(const std::vector<std::string>& args, const std::string& names,
+                        const std::string& program = linear_program()) {
+  const auto o = run_to_end(args, program);
   EXPECT_EQ(o.exit_code, 2) << o.err;
   EXPECT_NE(o.err.find(names), std::string::npos)
       << "message should name '" << names << "': " << o.err;
   EXPECT_EQ(std::count(o.err.begin(), o.err.end(), '\n'), 1) << "one line: " << o.err;
   EXPECT_EQ(o.out.find("ready"), std::string::npos) << "nothing may start: " << o.out;
+}
+
+TEST(PlantsimCli, RealPlantBadConfigExitsTwo) {
+  if (!real_program_exists()) GTEST_SKIP() << real_program() << " has not been built";
+  const auto dir = std::filesystem::temp_directory_path();
+  const auto write = [&](const std::string& name, const std::string& text) {
+    const auto path = dir / (name + std::to_string(getpid()) + ".toml");
+    FILE* f = std::fopen(path.c_str(), "w");
+    std::fputs(text.c_str(), f);
+    std::fclose(f);
+    return path.string();
+  };
+  const auto unknown = write("unknown", "[gov]\nno_such_key = 1\n");
+  const auto range = write("range", "[gov]\nr_pu = 7\n");
+  const auto broken = write("broken", "[gov\nr_pu = \n");
+  const std::string real = real_program();
+  expect_usage_error({"--preset", "atlantis"}, "atlantis", real);
+  expect_usage_error({"--config", unknown}, "no_such_key", real);
+  expect_usage_error({"--config", range}, "r_pu", real);
+  expect_usage_error({"--config", broken}, broken, real);
+  expect_usage_error({"--config", "/nonexistent/plant.toml"}, "/nonexistent/plant.toml", real);
+  expect_usage_error({"--fault", "gov.no_such_key=1@t=2"}, "no_such_key", real);
+  expect_usage_error({"--fault", "gov.r_pu=abc"}, "gov.r_pu=abc", real);
+  for (const auto& f : {unknown, range, broken}) std::filesystem::remove(f);
+}
+
+TEST(PlantsimCli, RealPlantLineariseAndListParams) {
+  if (!real_program_exists()) GTEST_SKIP() << real_program() << " has not been built";
+  const auto file = std::filesystem::temp_directory_path() /
+                    ("plantsim_tf_" + std::to_string(getpid()) + ".json");
+  const auto o = run_to_end({"--linearise", file.string()}, real_program());
+  EXPECT_EQ(o.exit_code, 0) << o.err;
+  std::ifstream in(file);
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  EXPECT_NE(text.find("\"type\": \"tf\""), std::string::npos) << text;
+  std::filesystem::remove(file);
+  const auto list = run_to_end({"--list-params"}, real_program());
+  EXPECT_EQ(list.exit_code, 0) << list.err;
+  EXPECT_NE(list.out.find("r_pu"), std::string::npos);
 }
 
 TEST(PlantsimCli, HelpExitsZero) {

@@ -6,5 +6,5 @@
 
 int main(int argc, char** argv) {
   return plantsim::serve::plantsim_main(argc, argv,
-                                        {plantsim::testing::make_linear_plant, nullptr});
+                                        {plantsim::testing::make_linear_plant, nullptr, nullptr});
 }

@@ -110,4 +110,24 @@ inline std::vector<std::uint16_t> scripted_exchange(modbus_t* ctx, int exchanges
   return out;
 }
 
+// Runs a program to its exit (10 s at most) and collects its output.
+struct Outcome {
+  int exit_code = -1;
+  std::string out;
+  std::string err;
+};
+
+inline Outcome run_to_end(std::vector<std::string> args,
+                          const std::string& program = linear_program()) {
+  args.insert(args.begin(), program);
+  ChildProcess p(args);
+  Outcome o;
+  const auto code = p.wait(10s);
+  EXPECT_TRUE(code) << "did not exit";
+  o.exit_code = code.value_or(-1);
+  while (auto line = p.read_line(10ms)) o.out += *line + "\n";
+  o.err = p.stderr_text(100ms);
+  return o;
+}
+
 }  // namespace plantsim::testing
