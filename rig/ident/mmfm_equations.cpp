@@ -157,6 +157,49 @@ signal::Correlation model_cross_correlation(const TransferFunction& tf,
   return out;
 }
 
+namespace {
+
+struct Solution {
+  Eigen::VectorXd theta_t;  // equilibrated unknowns, theta_t(ref) = 1
+  Eigen::MatrixXd cov_t;    // their covariance (zero row/column at ref)
+  Eigen::VectorXd residual;
+  double condition_number = 0.0;
+};
+
+// LS with theta_t(ref) = 1, or TLS (smallest right singular vector, rescaled), of mt theta = 0.
+// Covariance s^2 (A^T A)^-1 = s^2 V diag(1/sv^2) V^T for A = mt without column ref.
+Solution solve_equilibrated(const Eigen::MatrixXd& mt, Eigen::Index ref, MmfmSolver solver) {
+  const Eigen::Index rows = mt.rows(), p = mt.cols();
+  Eigen::MatrixXd a(rows, p - 1);
+  a << mt.leftCols(ref), mt.rightCols(p - 1 - ref);
+  Eigen::JacobiSVD<Eigen::MatrixXd> svd_a(a, Eigen::ComputeThinU | Eigen::ComputeThinV);
+  Solution sol;
+  sol.theta_t.resize(p);
+  if (solver == MmfmSolver::kLeastSquares) {
+    const Eigen::VectorXd z = svd_a.solve(-mt.col(ref));
+    sol.theta_t << z.head(ref), 1.0, z.tail(p - 1 - ref);
+    const Eigen::VectorXd sv = svd_a.singularValues();
+    sol.condition_number = sv(0) / sv(sv.size() - 1);
+  } else {
+    Eigen::JacobiSVD<Eigen::MatrixXd> svd(mt, Eigen::ComputeThinV);
+    sol.theta_t = svd.matrixV().col(p - 1) / svd.matrixV()(ref, p - 1);
+    const Eigen::VectorXd sv = svd.singularValues();
+    sol.condition_number = sv(0) / sv(p - 2);
+  }
+  sol.residual = mt * sol.theta_t;
+  const double s2 = sol.residual.squaredNorm() / std::max<Eigen::Index>(1, rows - (p - 1));
+  const Eigen::VectorXd inv_sv2 = svd_a.singularValues().array().square().inverse().matrix();
+  const Eigen::MatrixXd cov_z =
+      s2 * svd_a.matrixV() * inv_sv2.asDiagonal() * svd_a.matrixV().transpose();
+  sol.cov_t = Eigen::MatrixXd::Zero(p, p);
+  auto full = [ref](Eigen::Index i) { return i < ref ? i : i + 1; };
+  for (Eigen::Index i = 0; i < p - 1; ++i)
+    for (Eigen::Index j = 0; j < p - 1; ++j) sol.cov_t(full(i), full(j)) = cov_z(i, j);
+  return sol;
+}
+
+}  // namespace
+
 MmfmResult mmfm_solve(const signal::Correlation& ruu, const signal::Correlation& ryu,
                       ModelOrder order, double delay_s, const MmfmSettings& st) {
   check_axes(ruu, ryu);
@@ -166,55 +209,27 @@ MmfmResult mmfm_solve(const signal::Correlation& ruu, const signal::Correlation&
   if (st.centres_s.empty() || st.functions * static_cast<int>(st.centres_s.size()) < p - 1)
     throw std::invalid_argument("mmfm: fewer equations than unknowns (add functions/centres)");
   const Equations eq = build_equations(ruu, ryu, order, delay_s, st);
-  const Eigen::Index rows = eq.m.rows();
   Eigen::VectorXd col_norm = eq.m.colwise().norm().transpose();
   for (Eigen::Index j = 0; j < p; ++j)
     if (col_norm(j) == 0.0) col_norm(j) = 1.0;
   const Eigen::MatrixXd mt = eq.m * col_norm.cwiseInverse().asDiagonal();
   const Eigen::Index ref = st.normalisation == Normalisation::kMonicDen ? 0 : p - 1;
-  Eigen::MatrixXd a(rows, p - 1);
-  a << mt.leftCols(ref), mt.rightCols(p - 1 - ref);
-  Eigen::JacobiSVD<Eigen::MatrixXd> svd_a(a, Eigen::ComputeThinU | Eigen::ComputeThinV);
-  Eigen::VectorXd theta_t(p);  // equilibrated unknowns, theta_t(ref) = 1
-  MmfmResult res;
-  if (st.solver == MmfmSolver::kLeastSquares) {
-    const Eigen::VectorXd z = svd_a.solve(-mt.col(ref));
-    theta_t << z.head(ref), 1.0, z.tail(p - 1 - ref);
-    const Eigen::VectorXd sv = svd_a.singularValues();
-    res.condition_number = sv(0) / sv(sv.size() - 1);
-  } else {
-    Eigen::JacobiSVD<Eigen::MatrixXd> svd(mt, Eigen::ComputeThinV);
-    theta_t = svd.matrixV().col(p - 1) / svd.matrixV()(ref, p - 1);
-    const Eigen::VectorXd sv = svd.singularValues();
-    res.condition_number = sv(0) / sv(p - 2);
-  }
-  const Eigen::VectorXd e = mt * theta_t;
-  const double s2 = e.squaredNorm() / std::max<Eigen::Index>(1, rows - (p - 1));
-  // cov of the free equilibrated unknowns: s^2 (A^T A)^-1 = s^2 V diag(1/sv^2) V^T.
-  const Eigen::VectorXd inv_sv2 = svd_a.singularValues().array().square().inverse().matrix();
-  const Eigen::MatrixXd cov_z =
-      s2 * svd_a.matrixV() * inv_sv2.asDiagonal() * svd_a.matrixV().transpose();
-  Eigen::MatrixXd cov_t = Eigen::MatrixXd::Zero(p, p);
-  std::vector<Eigen::Index> free_idx;
-  for (Eigen::Index j = 0; j < p; ++j)
-    if (j != ref) free_idx.push_back(j);
-  for (size_t i = 0; i < free_idx.size(); ++i)
-    for (size_t j = 0; j < free_idx.size(); ++j)
-      cov_t(free_idx[i], free_idx[j]) = cov_z(static_cast<Eigen::Index>(i),
-                                              static_cast<Eigen::Index>(j));
+  const Solution sol = solve_equilibrated(mt, ref, st.solver);
   // Undo the equilibration and the time scaling: theta_i = theta_t_i / norm_i * S^power_i.
   Eigen::VectorXd unscale(p);
   for (int i = 0; i <= order.n; ++i) unscale(order.n - i) = std::pow(st.scale_s, i);
   for (int j = 0; j <= order.m; ++j) unscale(order.n + 1 + order.m - j) = std::pow(st.scale_s, j);
   unscale = unscale.cwiseQuotient(col_norm);
-  const Eigen::VectorXd theta = theta_t.cwiseProduct(unscale);
-  Eigen::MatrixXd cov = unscale.asDiagonal() * cov_t * unscale.asDiagonal();
-  const TransferFunction raw = unpack_parameters(theta, order, delay_s);
+  Eigen::MatrixXd cov = unscale.asDiagonal() * sol.cov_t * unscale.asDiagonal();
+  const TransferFunction raw =
+      unpack_parameters(sol.theta_t.cwiseProduct(unscale), order, delay_s);
+  MmfmResult res;
   res.model = normalise(raw, st.normalisation, &cov);
   res.covariance = cov;
+  res.condition_number = sol.condition_number;
   res.delay_s = delay_s;
-  res.equations = static_cast<int>(rows);
-  res.equation_residual = e.norm() / std::max(1e-300, mt.col(ref).norm());
+  res.equations = static_cast<int>(eq.m.rows());
+  res.equation_residual = sol.residual.norm() / std::max(1e-300, mt.col(ref).norm());
   res.settings = st;
   res.model_ryu = model_cross_correlation(res.model, ruu, ryu);
   res.correlation_fit_pct = fit_percent(ryu.r, res.model_ryu.r);
