@@ -7,6 +7,7 @@
 #include <functional>
 #include <map>
 #include <sstream>
+#include <vector>
 #include <toml++/toml.h>
 
 namespace rig::session {
@@ -97,6 +98,21 @@ Binder excitation_type(ExcitationType& field) {
   };
 }
 
+Binder choice(std::string& field, std::vector<std::string> allowed) {
+  return [&field, allowed](const Reader& r, const toml::node& n, const std::string& k) {
+    const std::string v = r.string(n, k);
+    std::string list;
+    for (const auto& a : allowed) {
+      if (a == v) {
+        field = v;
+        return;
+      }
+      list += (list.empty() ? "\"" : ", \"") + a + "\"";
+    }
+    r.fail(n, k, fmt::format("expected one of {}, got \"{}\"", list, v));
+  };
+}
+
 // delay_s = "auto" or a number of seconds.
 Binder delay(std::optional<double>& field) {
   return [&field](const Reader& r, const toml::node& n, const std::string& k) {
@@ -146,6 +162,8 @@ std::map<std::string, Section> schema(TestConfig& c) {
                {"lags", whole(c.mmfm.lags)},
                {"block_size", whole(c.mmfm.block_size)},
                {"skip", whole(c.mmfm.skip)},
+               {"correlator", choice(c.mmfm.correlator, {"direct", "fft", "relay", "polarity"})},
+               {"averaging", choice(c.mmfm.averaging, {"cumulative", "exponential"})},
                {"averaging_w", whole(c.mmfm.averaging_w)},
                {"target_rel_std_error", num(c.mmfm.target_rel_std_error)},
                {"min_duration_s", num(c.mmfm.min_duration_s)},
@@ -156,7 +174,8 @@ std::map<std::string, Section> schema(TestConfig& c) {
                 {"points", whole(c.sweep.points)},
                 {"settle_cycles", num(c.sweep.settle_cycles)},
                 {"integrate_cycles", num(c.sweep.integrate_cycles)},
-                {"min_settle_s", num(c.sweep.min_settle_s)}};
+                {"settle_time_constants", num(c.sweep.settle_time_constants)},
+                {"min_integrate_s", num(c.sweep.min_integrate_s)}};
   s["compare"] = {{"from_hz", num(c.compare.from_hz)},
                   {"to_hz", num(c.compare.to_hz)},
                   {"mag_tol_db", num(c.compare.mag_tol_db)},

@@ -70,6 +70,8 @@ struct MmfmSettings {
   int lags = 256;                   // correlation window (samples)
   int block_size = 2048;            // samples per correlator block / live estimate
   int skip = 1;                     // Fell's skip
+  std::string correlator = "direct";     // direct | fft | relay | polarity
+  std::string averaging = "cumulative";  // cumulative | exponential (weight averaging_w)
   int averaging_w = 8;              // exponential averaging weight (blocks)
   double target_rel_std_error = 0.05;  // stop when every parameter's rel. std error is below
   double min_duration_s = 60.0;     // never stop before this much excitation
@@ -81,9 +83,10 @@ struct SweepSettings {
   double from_hz = 0.3;
   double to_hz = 6.0;
   int points = 16;              // log-spaced
-  double settle_cycles = 3.0;   // cycles discarded after each frequency change
-  double integrate_cycles = 8.0;
-  double min_settle_s = 2.0;    // at least this long settled, whatever the frequency
+  double settle_cycles = 3.0;   // at least this many cycles settle after each change
+  double integrate_cycles = 8.0;  // at least this many whole cycles are integrated
+  double settle_time_constants = 5.0;  // and settle this many slowest time constants
+  double min_integrate_s = 4.0;  // and integrate at least this long
 };
 
 struct CompareSettings {

@@ -96,7 +96,8 @@ void check_sweep_and_compare(const TestConfig& c, const Checker& k) {
   k.at_least("sweep.points", c.sweep.points, 2);
   k.at_least("sweep.settle_cycles", c.sweep.settle_cycles, 0.0);
   k.at_least("sweep.integrate_cycles", c.sweep.integrate_cycles, 1.0);
-  k.at_least("sweep.min_settle_s", c.sweep.min_settle_s, 0.0);
+  k.at_least("sweep.settle_time_constants", c.sweep.settle_time_constants, 0.0);
+  k.at_least("sweep.min_integrate_s", c.sweep.min_integrate_s, 0.0);
   k.positive("compare.from_hz", c.compare.from_hz);
   k.require(c.compare.to_hz > c.compare.from_hz, "compare.to_hz", c.compare.to_hz,
             "must be above compare.from_hz");

@@ -1,0 +1,45 @@
+// `rig commission`: the commissioning test (DESIGN.md section 4).
+#include <CLI/CLI.hpp>
+#include <fmt/format.h>
+
+#include <memory>
+
+#include "rig/cli/session_commands.hpp"
+#include "rig/cli/session_run.hpp"
+#include "rig/session/session.hpp"
+
+namespace rig::cli {
+
+void add_session_options(CLI::App& cmd, SessionArgs& a) {
+  cmd.add_option("--link", a.link, "Governor link URI, e.g. modbus+tcp://10.0.0.5:502?unit=1");
+  cmd.add_option("--test", a.test_file, "Test file (TOML, see docs/test-file.md)")
+      ->check(CLI::ExistingFile);
+  cmd.add_option("--out", a.out_dir, "Output folder")->required();
+  cmd.add_flag("--emulate", a.emulate, "Start plantsim in lockstep and test against it");
+  cmd.add_option("--preset", a.preset, "Emulated plant preset")->default_str("stornoway");
+  cmd.add_option("--seed", a.seed, "Emulated plant noise seed")->default_str("1");
+  cmd.add_option("--link-type", a.link_type, "Emulated link: modbus+tcp, can+udp, modbus+rtu")
+      ->default_str("modbus+tcp");
+  cmd.add_option("--fault", a.faults, "Emulated plant fault NAME=VALUE@t=SECONDS (repeatable)");
+  cmd.add_flag("--json", a.json, "Print report.json on stdout instead of the summary");
+  cmd.add_flag("--quiet", a.quiet, "No live view");
+}
+
+void add_commission_command(CLI::App& app) {
+  auto args = std::make_shared<SessionArgs>();
+  CLI::App* cmd = app.add_subcommand(
+      "commission", "Commissioning test: steady-state check, pilot, excitation with online "
+                    "MMFM, swept sine, comparison, report");
+  add_session_options(*cmd, *args);
+  cmd->callback([args] {
+    int code = session::kExitConfig;
+    try {
+      code = run_session(*args, load_config(*args, "commission"), "commission");
+    } catch (const session::ConfigError& e) {
+      fmt::print(stderr, "rig commission: {}\n", e.what());
+    }
+    if (code != 0) throw CLI::RuntimeError(code);
+  });
+}
+
+}  // namespace rig::cli

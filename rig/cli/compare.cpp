@@ -1,0 +1,138 @@
+// `rig compare`: a model against a measured frequency response (DESIGN.md section 4).
+// Exit 0 when every checked point is within tolerance, 1 when not (or too few points are
+// good enough to judge), 2 for unreadable input.
+#include <CLI/CLI.hpp>
+#include <fmt/format.h>
+
+#include <complex>
+#include <filesystem>
+#include <memory>
+
+#include "rig/cli/session_commands.hpp"
+#include "rig/fra/compare.hpp"
+#include "rig/io/frf_file.hpp"
+#include "rig/io/input_error.hpp"
+#include "rig/io/model_file.hpp"
+#include "rig/report/bode_chart.hpp"
+#include "rig/report/html_report.hpp"
+#include "rig/report/json_out.hpp"
+
+namespace rig::cli {
+namespace {
+
+struct CompareArgs {
+  std::filesystem::path model, frf, out;
+  fra::CompareTolerances tol;
+  bool json = false;
+};
+
+std::vector<fra::FrfPoint> frf_points(const io::Frf& f) {
+  std::vector<fra::FrfPoint> pts;
+  for (Eigen::Index i = 0; i < f.size(); ++i) {
+    fra::FrfPoint p;
+    p.freq_hz = f.freq_hz(i);
+    p.mag = f.mag(i);
+    p.phase_deg = f.phase_deg(i);
+    p.coherence = f.coherence(i);
+    pts.push_back(p);
+  }
+  return pts;
+}
+
+nlohmann::json result_json(const CompareArgs& a, const fra::CompareResult& r) {
+  nlohmann::json rows = nlohmann::json::array();
+  for (const auto& row : r.rows) {
+    rows.push_back({{"freq_hz", row.freq_hz},
+                    {"model_mag", report::number_or_null(row.model_mag)},
+                    {"model_phase_deg", report::number_or_null(row.model_phase_deg)},
+                    {"mag_error_db", report::number_or_null(row.mag_error_db)},
+                    {"phase_error_deg", report::number_or_null(row.phase_error_deg)},
+                    {"checked", row.checked},
+                    {"pass", row.pass}});
+  }
+  return {{"command", "compare"},
+          {"model", a.model.string()},
+          {"frf", a.frf.string()},
+          {"tolerances", {{"mag_db", a.tol.mag_db}, {"phase_deg", a.tol.phase_deg},
+                          {"from_hz", a.tol.f_lo_hz}, {"to_hz", a.tol.f_hi_hz},
+                          {"min_coherence", a.tol.min_coherence}}},
+          {"verdict", fra::to_string(r.verdict)},
+          {"checked", r.checked},
+          {"failed", r.failed},
+          {"max_abs_mag_error_db", report::number_or_null(r.max_abs_mag_error_db)},
+          {"max_abs_phase_error_deg", report::number_or_null(r.max_abs_phase_error_deg)},
+          {"summary", r.summary},
+          {"rows", rows}};
+}
+
+void write_html(const CompareArgs& a, const ident::TransferFunction& tf,
+                const std::vector<fra::FrfPoint>& pts, const fra::CompareResult& r) {
+  std::vector<double> f;
+  std::vector<std::complex<double>> model, measured;
+  for (const auto& p : pts) {
+    f.push_back(p.freq_hz);
+    model.push_back(tf.response(p.freq_hz));
+    measured.push_back(p.value());
+  }
+  report::HtmlReport page("rig compare: " + a.model.filename().string() + " vs " +
+                          a.frf.filename().string());
+  page.note(r.verdict == fra::Verdict::kPass ? report::Tone::kOk : report::Tone::kWarning,
+            r.summary);
+  auto [mag, phase] = report::bode_charts(
+      "Model vs measured", f, {{"model", model, {}, {}, false, ""}, {"measured", measured, {}, {}, true, ""}});
+  page.section("Frequency response").chart(mag).chart(phase);
+  report::Table t{{"freq (Hz)", "mag error (dB)", "phase error (deg)", "checked", "pass"}, {}, {}};
+  for (const auto& row : r.rows) {
+    t.rows.push_back({fmt::format("{:.3f}", row.freq_hz), fmt::format("{:+.2f}", row.mag_error_db),
+                      fmt::format("{:+.1f}", row.phase_error_deg), row.checked ? "yes" : "no",
+                      row.pass ? "yes" : "no"});
+  }
+  page.section("Points").table(t);
+  page.write(a.out / "report.html");
+}
+
+int run_compare(const CompareArgs& a) {
+  io::ModelFile model;
+  io::Frf frf;
+  try {
+    model = io::read_model(a.model);
+    frf = io::read_frf(a.frf);
+  } catch (const io::InputError& e) {
+    fmt::print(stderr, "rig compare: {}\n", e.what());
+    return 2;
+  }
+  const auto pts = frf_points(frf);
+  const fra::CompareResult r = fra::compare(model.tf, pts, a.tol);
+  std::filesystem::create_directories(a.out);
+  const nlohmann::json doc = result_json(a, r);
+  report::write_json_file(a.out / "report.json", doc);
+  write_html(a, model.tf, pts, r);
+  if (a.json) {
+    fmt::print("{}\n", doc.dump(2));
+  } else {
+    fmt::print("rig compare: {}\n  report: {}\n", r.summary, (a.out / "report.html").string());
+  }
+  return r.verdict == fra::Verdict::kPass ? 0 : 1;
+}
+
+}  // namespace
+
+void add_compare_command(CLI::App& app) {
+  auto a = std::make_shared<CompareArgs>();
+  CLI::App* cmd = app.add_subcommand("compare", "Compare a model with a measured FRF");
+  cmd->add_option("--model", a->model, "Model JSON")->required();
+  cmd->add_option("--frf", a->frf, "FRF CSV (freq_hz,mag,phase_deg,coherence)")->required();
+  cmd->add_option("--out", a->out, "Output folder")->required();
+  cmd->add_option("--mag-tol-db", a->tol.mag_db, "Magnitude tolerance, dB")->default_val(1.0);
+  cmd->add_option("--phase-tol-deg", a->tol.phase_deg, "Phase tolerance, deg")->default_val(5.0);
+  cmd->add_option("--from", a->tol.f_lo_hz, "Check from, Hz")->default_val(0.5);
+  cmd->add_option("--to", a->tol.f_hi_hz, "Check to, Hz")->default_val(5.0);
+  cmd->add_option("--min-coherence", a->tol.min_coherence, "Ignore points below")->default_val(0.8);
+  cmd->add_flag("--json", a->json, "Print report.json on stdout");
+  cmd->callback([a] {
+    const int code = run_compare(*a);
+    if (code != 0) throw CLI::RuntimeError(code);
+  });
+}
+
+}  // namespace rig::cli

@@ -1,0 +1,112 @@
+#include "rig/cli/session_run.hpp"
+
+#include <fmt/format.h>
+#include <signal.h>
+
+#include <atomic>
+#include <cmath>
+#include <memory>
+
+#include "rig/session/emulator.hpp"
+#include "rig/session/session.hpp"
+#include "rig/session/session_outputs.hpp"
+
+namespace rig::cli {
+namespace {
+
+std::atomic<bool> g_abort{false};
+
+void on_sigint(int /*signal*/) { g_abort.store(true); }
+
+// SIGINT and SIGTERM ask for a clean ramp-down instead of killing the rig mid-test.
+void install_abort_handler() {
+  struct sigaction sa {};
+  sa.sa_handler = on_sigint;
+  sigemptyset(&sa.sa_mask);
+  sigaction(SIGINT, &sa, nullptr);
+  sigaction(SIGTERM, &sa, nullptr);
+}
+
+// plantsim ticks every 1 ms (its default --tick).
+constexpr double kPlantTickS = 1e-3;
+
+void print_summary(const session::SessionData& d, const std::filesystem::path& out) {
+  fmt::print("rig {}: {}\n", d.command, d.outcome);
+  if (d.mmfm && d.mmfm->derived.valid) {
+    const auto& g = d.mmfm->derived;
+    fmt::print("  MMFM: K {:.2f}+-{:.2f} kW/%  fn {:.3f}+-{:.3f} Hz  zeta {:.3f}+-{:.3f}  "
+               "Td {:.1f} ms\n",
+               g.gain, g.gain_std, g.fn_hz, g.fn_hz_std, g.zeta, g.zeta_std, 1e3 * d.mmfm->delay_s);
+  }
+  if (d.compare_sweep) fmt::print("  vs swept sine: {}\n", d.compare_sweep->summary);
+  if (d.compare_h1) fmt::print("  vs H1: {}\n", d.compare_h1->summary);
+  fmt::print("  test time {:.1f} s, wall {:.1f} s, largest deviation {:.2f} % of P0\n",
+             d.test_time_s, d.wall_time_s, d.max_abs_deviation_pct);
+  fmt::print("  report: {}\n", (out / "report.html").string());
+}
+
+}  // namespace
+
+session::TestConfig load_config(const SessionArgs& args, const std::string& command) {
+  session::TestConfig c = args.test_file.empty()
+                              ? session::parse_test_toml("", "<defaults>")
+                              : session::load_test_file(args.test_file);
+  if (args.emulate) {
+    if (args.link_type != "modbus+tcp" && args.link_type != "can+udp" &&
+        args.link_type != "modbus+rtu") {
+      throw session::ConfigError(fmt::format(
+          "rig {}: --link-type {}: expected modbus+tcp, can+udp or modbus+rtu", command,
+          args.link_type));
+    }
+    if (c.link.lockstep_ticks == 0) {
+      c.link.lockstep_ticks =
+          static_cast<int>(std::lround(1.0 / (c.link.sample_rate_hz * kPlantTickS)));
+    }
+    if (c.plant.preset.empty()) c.plant.preset = args.preset;
+    session::validate(c);
+  } else if (args.link.empty() && c.link.uri.empty()) {
+    throw session::ConfigError(fmt::format(
+        "rig {}: no link: give --link URI, link.uri in the test file, or --emulate", command));
+  }
+  return c;
+}
+
+int run_session(const SessionArgs& args, session::TestConfig config, const std::string& command) {
+  install_abort_handler();
+  std::filesystem::create_directories(args.out_dir);
+  std::unique_ptr<session::EmulatedPlant> plant;
+  session::SessionOptions o;
+  o.out_dir = args.out_dir;
+  o.command = command;
+  o.link_uri = args.link;
+  o.abort = &g_abort;
+  o.live_out = args.quiet ? nullptr : stderr;
+  if (args.emulate) {
+    session::EmulatorOptions e;
+    e.plantsim = session::default_plantsim_path();
+    e.preset = args.preset;
+    e.seed = args.seed;
+    e.link_type = args.link_type;
+    e.faults = args.faults;
+    e.log = args.out_dir / "plantsim.log";
+    try {
+      plant = std::make_unique<session::EmulatedPlant>(e);
+    } catch (const session::EmulatorError& ex) {
+      fmt::print(stderr, "rig {}: {}\n", command, ex.what());
+      return session::kExitFault;
+    }
+    o.link_uri = plant->link_uri();
+    o.preset = args.preset;
+    o.plant_seed = args.seed;
+  }
+  const session::SessionData d = session::run_commission(config, o);
+  if (plant) plant->stop();
+  if (args.json) {
+    fmt::print("{}\n", session::report_json(d).dump(2));
+  } else {
+    print_summary(d, args.out_dir);
+  }
+  return d.exit_code;
+}
+
+}  // namespace rig::cli

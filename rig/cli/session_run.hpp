@@ -1,0 +1,35 @@
+// Shared by `rig commission` and `rig sweep`: test file loading, the emulated plant,
+// SIGINT handling and the human/JSON summary.
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "rig/session/test_config.hpp"
+
+namespace rig::cli {
+
+struct SessionArgs {
+  std::string link;
+  std::filesystem::path test_file;
+  std::filesystem::path out_dir;
+  bool emulate = false;
+  std::string preset = "stornoway";
+  std::uint64_t seed = 1;
+  std::string link_type = "modbus+tcp";
+  std::vector<std::string> faults;
+  bool json = false;
+  bool quiet = false;
+};
+
+// Loads the test file (or the defaults), applies the emulated-plant settings, checks that a
+// link is named. Throws session::ConfigError (exit code 2).
+session::TestConfig load_config(const SessionArgs& args, const std::string& command);
+
+// Runs the session (starting and stopping plantsim for --emulate) and returns the exit code.
+int run_session(const SessionArgs& args, session::TestConfig config, const std::string& command);
+
+}  // namespace rig::cli

@@ -1,0 +1,85 @@
+// The commissioning test (DESIGN.md sections 2 and 8), phase by phase:
+//   connect, configure -> steady-state check (nothing written to the governor; refuse to
+//   start when it fails) -> activate -> pilot excitation (gain estimate) -> amplitude plan ->
+//   excitation with online MMFM until the stopping rule -> ramp-down -> swept sine ->
+//   comparison -> deactivate -> outputs (recording, model, FRFs, report).
+// Every tick goes through the Supervisor; a trip, a link error or an operator abort ramps the
+// bias back to baseline, is recorded with its cause, and sets the exit code:
+//   0 pass, 1 acceptance check failed, 2 configuration, 3 link or plant fault (including a
+//   refused steady-state check), 4 safety abort (band breach, supervisor trip, operator abort).
+#pragma once
+
+#include <atomic>
+#include <cstdint>
+#include <cstdio>
+#include <filesystem>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "rig/fra/compare.hpp"
+#include "rig/fra/frf.hpp"
+#include "rig/ident/mmfm.hpp"
+#include "rig/session/online_mmfm.hpp"
+#include "rig/session/pilot.hpp"
+#include "rig/session/steady_state.hpp"
+#include "rig/session/supervisor.hpp"
+#include "rig/session/test_config.hpp"
+#include "rig/session/tick_loop.hpp"
+
+namespace rig::session {
+
+enum ExitCode : int {
+  kExitPass = 0,
+  kExitAcceptance = 1,
+  kExitConfig = 2,
+  kExitFault = 3,
+  kExitSafety = 4,
+};
+
+struct SessionOptions {
+  std::filesystem::path out_dir;
+  std::string link_uri;  // overrides config.link.uri when set
+  std::string preset;    // emulated plant (recorded)
+  std::optional<std::uint64_t> plant_seed;
+  std::string command = "commission";        // "commission" or "sweep"
+  std::FILE* live_out = stderr;              // live view (nullptr: silent)
+  const std::atomic<bool>* abort = nullptr;  // set by the SIGINT handler
+};
+
+// Everything the report is made of.
+struct SessionData {
+  TestConfig config;
+  std::string link_uri;
+  std::string command;
+  std::string preset;
+  std::optional<std::uint64_t> plant_seed;
+  std::optional<SteadyStateResult> steady;
+  std::optional<PilotResult> pilot;
+  double excitation_sigma_pct = 0.0;
+  double excitation_s = 0.0;
+  std::string stop_reason;  // why the excitation stopped
+  std::vector<BlockEstimate> history;
+  std::optional<ident::MmfmResult> mmfm;
+  std::string mmfm_error;
+  signal::Correlation ruu, ryu;  // online correlations (AC-coupled)
+  std::vector<fra::FrfPoint> sweep, h1;
+  std::optional<fra::CompareResult> compare_sweep, compare_h1;
+  std::vector<Event> events;
+  std::optional<TripRecord> trip;
+  TickLoop::Trace trace;
+  double max_abs_deviation_pct = 0.0;
+  double test_time_s = 0.0;  // plant/test time
+  double wall_time_s = 0.0;
+  int exit_code = kExitPass;
+  std::string outcome;  // one line
+};
+
+// Runs the whole test and writes every output file into options.out_dir.
+SessionData run_commission(const TestConfig& config, const SessionOptions& options);
+
+// Exit code for a supervisor trip cause.
+int exit_code_for(TripCause cause);
+
+}  // namespace rig::session

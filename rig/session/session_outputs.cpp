@@ -1,0 +1,205 @@
+#include "rig/session/session_outputs.hpp"
+
+#include <fmt/format.h>
+
+#include "rig/io/frf_file.hpp"
+#include "rig/io/model_file.hpp"
+#include "rig/report/json_out.hpp"
+
+namespace rig::session {
+namespace {
+
+using nlohmann::json;
+using report::number_or_null;
+
+json parameters_json(const std::vector<ident::ParameterEstimate>& params) {
+  json a = json::array();
+  for (const auto& p : params) {
+    a.push_back({{"name", p.name}, {"value", number_or_null(p.value)},
+                 {"std_error", number_or_null(p.std_error)}});
+  }
+  return a;
+}
+
+json derived_json(const ident::DerivedFigures& d) {
+  if (!d.valid) return nullptr;
+  return {{"gain_kw_per_pct", number_or_null(d.gain)}, {"gain_std", number_or_null(d.gain_std)},
+          {"fn_hz", number_or_null(d.fn_hz)},          {"fn_hz_std", number_or_null(d.fn_hz_std)},
+          {"zeta", number_or_null(d.zeta)},            {"zeta_std", number_or_null(d.zeta_std)}};
+}
+
+json compare_json(const std::optional<fra::CompareResult>& c) {
+  if (!c) return nullptr;
+  json rows = json::array();
+  for (const auto& r : c->rows) {
+    rows.push_back({{"freq_hz", r.freq_hz}, {"mag_error_db", number_or_null(r.mag_error_db)},
+                    {"phase_error_deg", number_or_null(r.phase_error_deg)},
+                    {"checked", r.checked}, {"pass", r.pass}});
+  }
+  return {{"verdict", fra::to_string(c->verdict)},
+          {"checked", c->checked},
+          {"failed", c->failed},
+          {"max_abs_mag_error_db", number_or_null(c->max_abs_mag_error_db)},
+          {"max_abs_phase_error_deg", number_or_null(c->max_abs_phase_error_deg)},
+          {"summary", c->summary},
+          {"rows", rows}};
+}
+
+json frf_json(const std::vector<fra::FrfPoint>& frf) {
+  json a = json::array();
+  for (const auto& p : frf) {
+    a.push_back({{"freq_hz", p.freq_hz}, {"mag", number_or_null(p.mag)},
+                 {"phase_deg", number_or_null(p.phase_deg)},
+                 {"coherence", number_or_null(p.coherence)}, {"valid", p.valid}});
+  }
+  return a;
+}
+
+json history_json(const std::vector<BlockEstimate>& history) {
+  json a = json::array();
+  for (const auto& e : history) {
+    a.push_back({{"block", e.block}, {"t_s", e.t_s}, {"ok", e.ok}, {"error", e.error},
+                 {"parameters", parameters_json(e.parameters)},
+                 {"derived", derived_json(e.derived)},
+                 {"delay_s", number_or_null(e.delay_s)},
+                 {"max_rel_std_error", number_or_null(e.max_rel_std_error)},
+                 {"correlation_fit_pct", number_or_null(e.correlation_fit_pct)}});
+  }
+  return a;
+}
+
+json config_json(const TestConfig& c) {
+  return {{"source", c.source},
+          {"sample_rate_hz", c.link.sample_rate_hz},
+          {"lockstep_ticks", c.link.lockstep_ticks},
+          {"rated_power_kw", c.plant.rated_power_kw},
+          {"band_pct", c.safety.band_pct},
+          {"band_override", c.safety.allow_band_above_3pct && c.safety.band_pct > kStandardBandPct},
+          {"clamp_pct", c.safety.clamp_pct},
+          {"excitation", to_string(c.excitation.type)},
+          {"bandwidth_hz", c.excitation.bandwidth_hz},
+          {"excitation_seed", c.excitation.seed},
+          {"ac_coupling_rc_s", c.excitation.ac_coupling_rc_s},
+          {"order", {c.mmfm.order_n, c.mmfm.order_m}},
+          {"lags", c.mmfm.lags},
+          {"block_size", c.mmfm.block_size},
+          {"skip", c.mmfm.skip},
+          {"correlator", c.mmfm.correlator},
+          {"averaging", c.mmfm.averaging},
+          {"target_rel_std_error", c.mmfm.target_rel_std_error},
+          {"sweep", {{"from_hz", c.sweep.from_hz}, {"to_hz", c.sweep.to_hz},
+                     {"points", c.sweep.points}, {"enabled", c.sweep.enabled}}},
+          {"compare", {{"from_hz", c.compare.from_hz}, {"to_hz", c.compare.to_hz},
+                       {"mag_tol_db", c.compare.mag_tol_db},
+                       {"phase_tol_deg", c.compare.phase_tol_deg}}}};
+}
+
+}  // namespace
+
+json report_json(const SessionData& d) {
+  json j;
+  j["command"] = d.command;
+  j["exit_code"] = d.exit_code;
+  j["outcome"] = d.outcome;
+  j["link"] = d.link_uri;
+  j["preset"] = d.preset;
+  j["plant_seed"] = d.plant_seed ? json(*d.plant_seed) : json(nullptr);
+  j["config"] = config_json(d.config);
+  if (d.steady) {
+    j["steady_state"] = {{"ok", d.steady->ok}, {"p0_kw", d.steady->p0_kw},
+                         {"noise_pct", d.steady->noise_pct}, {"drift_pct", d.steady->drift_pct},
+                         {"duration_s", d.steady->duration_s}, {"reason", d.steady->reason}};
+  }
+  if (d.pilot) {
+    j["pilot"] = {{"ok", d.pilot->ok}, {"gain_kw_per_pct", d.pilot->gain_kw_per_pct},
+                  {"applied_std_pct", d.pilot->applied_std_pct},
+                  {"planned_std_pct", d.pilot->planned_std_pct},
+                  {"predicted_peak_kw", d.pilot->predicted_peak_kw},
+                  {"band_kw", d.pilot->band_kw}, {"limited_by_clamp", d.pilot->limited_by_clamp}};
+  }
+  j["excitation"] = {{"std_pct", d.excitation_sigma_pct}, {"duration_s", d.excitation_s},
+                     {"stop_reason", d.stop_reason}};
+  if (d.mmfm) {
+    const auto& m = *d.mmfm;
+    j["mmfm"] = {{"num", report::to_json_array(m.model.num)},
+                 {"den", report::to_json_array(m.model.den)},
+                 {"delay_s", m.delay_s},
+                 {"delay_std_s", number_or_null(m.delay_std_s)},
+                 {"parameters", parameters_json(m.parameters)},
+                 {"derived", derived_json(m.derived)},
+                 {"condition_number", number_or_null(m.condition_number)},
+                 {"correlation_fit_pct", number_or_null(m.correlation_fit_pct)}};
+  } else {
+    j["mmfm"] = nullptr;
+  }
+  j["mmfm_error"] = d.mmfm_error;
+  j["history"] = history_json(d.history);
+  j["sweep"] = frf_json(d.sweep);
+  j["compare"] = {{"sweep", compare_json(d.compare_sweep)}, {"h1", compare_json(d.compare_h1)}};
+  j["safety"] = {{"band_pct", d.config.safety.band_pct},
+                 {"band_override", d.config.safety.band_pct > kStandardBandPct},
+                 {"max_abs_deviation_pct", d.max_abs_deviation_pct},
+                 {"trip", d.trip ? json{{"cause", to_string(d.trip->cause)},
+                                        {"text", d.trip->text},
+                                        {"tick", d.trip->tick}}
+                                 : json(nullptr)}};
+  json events = json::array();
+  for (const auto& e : d.events) events.push_back({{"t_s", e.t_s}, {"kind", e.kind}, {"text", e.text}});
+  j["events"] = events;
+  j["timing"] = {{"test_time_s", d.test_time_s}, {"wall_time_s", d.wall_time_s}};
+  return j;
+}
+
+namespace {
+
+io::Frf to_frf(const std::vector<fra::FrfPoint>& pts) {
+  io::Frf f;
+  const auto n = static_cast<Eigen::Index>(pts.size());
+  f.freq_hz.resize(n);
+  f.mag.resize(n);
+  f.phase_deg.resize(n);
+  f.coherence.resize(n);
+  for (Eigen::Index i = 0; i < n; ++i) {
+    const auto& p = pts[static_cast<std::size_t>(i)];
+    f.freq_hz(i) = p.freq_hz;
+    f.mag(i) = p.mag;
+    f.phase_deg(i) = p.phase_deg;
+    f.coherence(i) = std::clamp(p.coherence, 0.0, 1.0);
+  }
+  return f;
+}
+
+template <class Fn>
+void attempt(const char* what, Fn fn) {
+  try {
+    fn();
+  } catch (const std::exception& e) {
+    fmt::print(stderr, "rig: could not write {}: {}\n", what, e.what());
+  }
+}
+
+}  // namespace
+
+void write_outputs(const SessionData& d, const std::filesystem::path& out) {
+  std::error_code ec;
+  std::filesystem::create_directories(out, ec);
+  if (d.mmfm) {
+    attempt("model.json", [&] {
+      io::ModelFile m;
+      m.tf = d.mmfm->model;
+      m.tf.delay_s = d.mmfm->delay_s;
+      m.input.assign(1, 'u');
+      m.output.assign(1, 'y');
+      m.units = "kW/%";
+      m.extra["parameters"] = parameters_json(d.mmfm->parameters);
+      m.extra["method"] = "mmfm";
+      io::write_model(out / "model.json", m);
+    });
+  }
+  if (!d.sweep.empty()) attempt("sweep.csv", [&] { io::write_frf(out / "sweep.csv", to_frf(d.sweep)); });
+  if (!d.h1.empty()) attempt("h1.csv", [&] { io::write_frf(out / "h1.csv", to_frf(d.h1)); });
+  attempt("report.json", [&] { report::write_json_file(out / "report.json", report_json(d)); });
+  attempt("report.html", [&] { write_report_html(d, out / "report.html"); });
+}
+
+}  // namespace rig::session

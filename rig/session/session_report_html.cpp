@@ -1,0 +1,184 @@
+// report.html of a commissioning test: summary, Bode overlay (MMFM model, swept sine, H1)
+// with coherence, correlation functions, parameter convergence with uncertainty, and the
+// power deviation against the band.
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <complex>
+#include <limits>
+#include <set>
+
+#include "rig/report/bode_chart.hpp"
+#include "rig/report/html_report.hpp"
+#include "rig/session/session_outputs.hpp"
+
+namespace rig::session {
+namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+report::Tone tone_for(int exit_code) {
+  if (exit_code == kExitPass) return report::Tone::kOk;
+  if (exit_code == kExitAcceptance) return report::Tone::kWarning;
+  return report::Tone::kFatal;
+}
+
+void summary(report::HtmlReport& page, const SessionData& d) {
+  page.note(tone_for(d.exit_code), fmt::format("exit code {}: {}", d.exit_code, d.outcome));
+  std::vector<std::pair<std::string, std::string>> kv = {
+      {"link", d.link_uri},
+      {"plant preset", d.preset.empty() ? "-" : d.preset},
+      {"test time", fmt::format("{:.1f} s (wall {:.1f} s)", d.test_time_s, d.wall_time_s)},
+      {"power band", fmt::format("+-{:.2f} % of P0{}", d.config.safety.band_pct,
+                                 d.config.safety.band_pct > kStandardBandPct
+                                     ? " (ABOVE 3 %: explicit override in the test file)"
+                                     : "")},
+      {"largest deviation", fmt::format("{:.2f} % of P0", d.max_abs_deviation_pct)}};
+  if (d.steady) {
+    kv.push_back({"steady state", fmt::format("P0 {:.1f} kW, noise {:.3f} %, drift {:.3f} %",
+                                              d.steady->p0_kw, d.steady->noise_pct,
+                                              d.steady->drift_pct)});
+  }
+  if (d.pilot && d.pilot->ok) {
+    kv.push_back({"pilot", fmt::format("gain {:.1f} kW/%, excitation std {:.3f} %",
+                                       d.pilot->gain_kw_per_pct, d.pilot->planned_std_pct)});
+  }
+  if (d.excitation_s > 0.0) {
+    kv.push_back({"excitation", fmt::format("{:.0f} s, {}", d.excitation_s, d.stop_reason)});
+  }
+  if (d.mmfm && d.mmfm->derived.valid) {
+    const auto& g = d.mmfm->derived;
+    kv.push_back({"MMFM model", fmt::format("K {:.2f}+-{:.2f} kW/%, fn {:.3f}+-{:.3f} Hz, "
+                                            "zeta {:.3f}+-{:.3f}, Td {:.1f}+-{:.1f} ms",
+                                            g.gain, g.gain_std, g.fn_hz, g.fn_hz_std, g.zeta,
+                                            g.zeta_std, 1e3 * d.mmfm->delay_s,
+                                            1e3 * d.mmfm->delay_std_s)});
+  }
+  if (d.compare_sweep) kv.push_back({"MMFM vs swept sine", d.compare_sweep->summary});
+  if (d.compare_h1) kv.push_back({"MMFM vs H1", d.compare_h1->summary});
+  if (d.trip) kv.push_back({"trip", fmt::format("{}: {}", to_string(d.trip->cause), d.trip->text)});
+  page.section("Summary").key_values(kv);
+}
+
+void bode(report::HtmlReport& page, const SessionData& d) {
+  if (!d.mmfm && d.sweep.empty() && d.h1.empty()) return;
+  const double f_lo = std::min(0.1, d.config.sweep.from_hz);
+  const double f_hi = std::max(10.0, d.config.sweep.to_hz);
+  std::set<double> grid;
+  for (double f : report::log_space(f_lo, f_hi, 160)) grid.insert(f);
+  for (const auto& p : d.sweep) grid.insert(p.freq_hz);
+  for (const auto& p : d.h1) if (p.freq_hz >= f_lo && p.freq_hz <= f_hi) grid.insert(p.freq_hz);
+  const std::vector<double> f(grid.begin(), grid.end());
+  auto measured = [&](const std::vector<fra::FrfPoint>& pts) {
+    std::vector<std::complex<double>> h(f.size(), {kNaN, kNaN});
+    for (const auto& p : pts) {
+      const auto it = std::lower_bound(f.begin(), f.end(), p.freq_hz);
+      if (it != f.end() && *it == p.freq_hz) h[static_cast<std::size_t>(it - f.begin())] = p.value();
+    }
+    return h;
+  };
+  std::vector<report::BodeCurve> curves;
+  if (d.mmfm) {
+    report::BodeCurve m{"MMFM model", {}, {}, {}, false, ""};
+    for (double x : f) m.response.push_back(d.mmfm->model.response(x));
+    curves.push_back(m);
+  }
+  if (!d.sweep.empty()) curves.push_back({"swept sine", measured(d.sweep), {}, {}, true, ""});
+  if (!d.h1.empty()) curves.push_back({"H1 (noise-driven)", measured(d.h1), {}, {}, true, ""});
+  auto [mag, phase] = report::bode_charts("Frequency response, kW per % bias", f, curves);
+  page.section("Frequency response").chart(mag).chart(phase);
+  report::Chart coh{"Coherence", "frequency (Hz)", "coherence", f, {}, {}, true, false, 220};
+  auto coherence = [&](const std::vector<fra::FrfPoint>& pts, const std::string& label) {
+    report::Series s{label, std::vector<double>(f.size(), kNaN), "", false, true, 1.5};
+    for (const auto& p : pts) {
+      const auto it = std::lower_bound(f.begin(), f.end(), p.freq_hz);
+      if (it != f.end() && *it == p.freq_hz) s.y[static_cast<std::size_t>(it - f.begin())] = p.coherence;
+    }
+    coh.series.push_back(s);
+  };
+  if (!d.sweep.empty()) coherence(d.sweep, "swept sine");
+  if (!d.h1.empty()) coherence(d.h1, "H1");
+  if (!coh.series.empty()) page.chart(coh);
+}
+
+void correlations(report::HtmlReport& page, const SessionData& d) {
+  if (d.ryu.size() == 0 || d.ruu.size() != d.ryu.size()) return;
+  report::Chart c{"Correlation functions (AC-coupled, averaged)", "lag (s)", "", {}, {}, {}, false,
+                  false, 280};
+  report::Series ruu{"r_uu (%^2)", {}, "", false, false, 1.5};
+  report::Series ryu{"r_yu (kW %)", {}, "", false, false, 1.5};
+  report::Series model{"model h * r_uu", {}, "", true, false, 1.5};
+  const bool has_model = d.mmfm && d.mmfm->model_ryu.size() == d.ryu.size();
+  for (Eigen::Index i = 0; i < d.ryu.size(); ++i) {
+    c.x.push_back(d.ryu.lag_s(i));
+    ruu.y.push_back(d.ruu.r(i));
+    ryu.y.push_back(d.ryu.r(i));
+    if (has_model) model.y.push_back(d.mmfm->model_ryu.r(i));
+  }
+  report::Chart a = c;
+  a.title = "Auto-correlation of the applied excitation";
+  a.series = {ruu};
+  c.title = "Cross-correlation power/excitation";
+  c.series = {ryu};
+  if (has_model) c.series.push_back(model);
+  page.section("Correlation functions").chart(a).chart(c);
+}
+
+void convergence(report::HtmlReport& page, const SessionData& d) {
+  std::vector<const BlockEstimate*> ok;
+  for (const auto& e : d.history) if (e.ok && e.derived.valid) ok.push_back(&e);
+  if (ok.empty()) return;
+  page.section("Parameter convergence (estimate +- 1 standard error)");
+  auto chart = [&](const std::string& name, auto value, auto se) {
+    report::Chart c{name, "excitation time (s)", name, {}, {}, {}, false, false, 220};
+    report::Series v{name, {}, "", false, true, 1.5};
+    report::Series hi{"+1 se", {}, "#9ab", true, false, 1.0};
+    report::Series lo{"-1 se", {}, "#9ab", true, false, 1.0};
+    for (const auto* e : ok) {
+      c.x.push_back(e->t_s);
+      v.y.push_back(value(*e));
+      const double s = std::isfinite(se(*e)) ? se(*e) : 0.0;
+      hi.y.push_back(value(*e) + s);
+      lo.y.push_back(value(*e) - s);
+    }
+    c.series = {v, hi, lo};
+    c.bands.push_back({1, 2, "rgba(31,119,180,0.18)"});
+    page.chart(c);
+  };
+  chart("gain K (kW/%)", [](const BlockEstimate& e) { return e.derived.gain; },
+        [](const BlockEstimate& e) { return e.derived.gain_std; });
+  chart("natural frequency fn (Hz)", [](const BlockEstimate& e) { return e.derived.fn_hz; },
+        [](const BlockEstimate& e) { return e.derived.fn_hz_std; });
+  chart("damping ratio zeta", [](const BlockEstimate& e) { return e.derived.zeta; },
+        [](const BlockEstimate& e) { return e.derived.zeta_std; });
+}
+
+void deviation(report::HtmlReport& page, const SessionData& d) {
+  if (d.trace.t_s.empty()) return;
+  report::Chart c{"Power deviation against the band", "test time (s)", "% of P0", d.trace.t_s,
+                  {}, {}, false, false, 280};
+  const double band = d.config.safety.band_pct;
+  c.series.push_back({"(P - P0) / P0", d.trace.deviation_pct, "", false, false, 1.0});
+  c.series.push_back({"+band", std::vector<double>(d.trace.t_s.size(), band), "#d62728", true, false, 1.5});
+  c.series.push_back({"-band", std::vector<double>(d.trace.t_s.size(), -band), "#d62728", true, false, 1.5});
+  c.series.push_back({"bias u (%)", d.trace.u_pct, "#7f7f7f", false, false, 1.0});
+  page.section("Safety").chart(c);
+  report::Table t{{"t (s)", "kind", "event"}, {}, {}};
+  for (const auto& e : d.events) t.rows.push_back({fmt::format("{:.2f}", e.t_s), e.kind, e.text});
+  if (!t.rows.empty()) page.table(t);
+}
+
+}  // namespace
+
+void write_report_html(const SessionData& d, const std::filesystem::path& path) {
+  report::HtmlReport page(fmt::format("rig {}: {}", d.command, d.link_uri));
+  summary(page, d);
+  bode(page, d);
+  correlations(page, d);
+  convergence(page, d);
+  deviation(page, d);
+  page.write(path);
+}
+
+}  // namespace rig::session
