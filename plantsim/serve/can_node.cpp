@@ -71,22 +71,26 @@ void CanNode::run() {
   const int fd = ep_->fd();
   while (!stop_) {
     pollfd p{fd, POLLIN, 0};
-    const int n = ::poll(&p, 1, 50);
-    if (n <= 0) continue;
-    std::optional<can_frame> frame;
-    {
-      std::lock_guard lock(mu_);
-      auto r = ep_->receive(std::chrono::milliseconds(0));
-      if (r) {
-        frame = r.value();
-      } else if (r.error().kind == drivers::LinkErrorKind::kLinkLost) {
-        failure_ = r.error();
-        return;
-      } else if (r.error().kind != drivers::LinkErrorKind::kTimeout) {
-        ++counters_.bad_checksum;  // a datagram that is not a can_frame
+    if (::poll(&p, 1, 50) <= 0) continue;
+    // Everything queued is handled before polling again (a rig sends command + lockstep).
+    while (!stop_) {
+      std::optional<can_frame> frame;
+      {
+        std::lock_guard lock(mu_);
+        auto r = ep_->receive(std::chrono::milliseconds(0));
+        if (r) {
+          frame = r.value();
+        } else if (r.error().kind == drivers::LinkErrorKind::kLinkLost) {
+          failure_ = r.error();
+          return;
+        } else if (r.error().kind == drivers::LinkErrorKind::kTimeout) {
+          break;
+        } else {
+          ++counters_.bad_checksum;  // a datagram that is not a can_frame
+        }
       }
+      if (frame) handle(*frame);
     }
-    if (frame) handle(*frame);
   }
 }
 
