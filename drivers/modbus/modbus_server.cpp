@@ -84,8 +84,9 @@ ModbusServer::~ModbusServer() {
 }
 
 LinkResult<std::unique_ptr<ModbusServer>> ModbusServer::listen_tcp(
-    const std::string& host, int port, const ModbusServerOptions& options) {
-  const std::string where = fmt::format("tcp://{}:{}", host, port);
+    const std::string& host_in, int port, const ModbusServerOptions& options) {
+  const std::string where = fmt::format("tcp://{}:{}", host_in, port);
+  const std::string host = host_in == "localhost" ? "127.0.0.1" : host_in;
   in_addr probe{};
   if (port < 0 || port > 65535 || inet_pton(AF_INET, host.c_str(), &probe) != 1) {
     return LinkError{LinkErrorKind::kConfig, where, "expected an IPv4 address and a port 0-65535"};

@@ -84,6 +84,11 @@ TEST(CanUdp, LockstepFramesCommandsAndRejectedFrames) {
   EXPECT_EQ(echo_after_one_tick(*ep, mb.get()), 1500);
   send(*ep, command(-2.0, 10));
   EXPECT_EQ(echo_after_one_tick(*ep, mb.get()), -2000);
+  // TSC1 speed request 603 rpm at 600 rpm synchronous: the bias 100 (603 - 600) / 600 = 0.5 %.
+  send(*ep, j1939::encode_tsc1(j1939::Tsc1{603.0, 0}));
+  EXPECT_EQ(echo_after_one_tick(*ep, mb.get()), 500);
+  send(*ep, command(-2.0, 11));
+  EXPECT_EQ(echo_after_one_tick(*ep, mb.get()), -2000);
   // The counter is the heartbeat: 500 ms of plant time without a frame drops the bias.
   send(*ep, j1939::encode_lockstep(j1939::Lockstep{499}));
   collect(*ep, 100ms);
