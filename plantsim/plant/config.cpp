@@ -26,8 +26,8 @@ void apply_table(const toml::table& table, const std::string& block, const std::
     const std::string where = fmt::format("{}:{}", origin, node.source().begin.line);
     const auto id = find_param(name);
     if (!id || name.find('.') != name.rfind('.')) {
-      throw ConfigError(
-          fmt::format("{}: unknown parameter '{}' (plantsim --list-params shows them all)", where, name));
+      throw ConfigError(fmt::format(
+          "{}: unknown parameter '{}' (plantsim --list-params shows them all)", where, name));
     }
     double value = 0.0;
     if (node.is_boolean()) {

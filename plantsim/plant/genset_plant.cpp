@@ -38,10 +38,9 @@ GensetPlant::GensetPlant(const Params& params, std::vector<TimedChange> changes,
   Params check = params;
   for (std::size_t i = 0; i <= changes_.size(); ++i) {
     if (dead_time_s(check) > kMaxDeadTimeS) {
-      throw ConfigError(fmt::format("engine: fuel dead time {:.3f} s{}, expected <= {} s",
-                                    dead_time_s(check),
-                                    i == 0 ? "" : " after --fault '" + changes_[i - 1].text + "'",
-                                    kMaxDeadTimeS));
+      throw ConfigError(fmt::format(
+          "engine: fuel dead time {:.3f} s{}, expected <= {} s", dead_time_s(check),
+          i == 0 ? "" : " after --fault '" + changes_[i - 1].text + "'", kMaxDeadTimeS));
     }
     if (i < changes_.size()) check.set(changes_[i].param, changes_[i].value, changes_[i].text);
   }

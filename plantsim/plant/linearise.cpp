@@ -1,14 +1,9 @@
 #include "plantsim/plant/linearise.hpp"
 
-#include <fmt/format.h>
-
 #include <Eigen/Dense>
 #include <Eigen/Eigenvalues>
 #include <cmath>
-#include <fstream>
-#include <nlohmann/json.hpp>
 #include <numbers>
-#include <unsupported/Eigen/MatrixFunctions>
 #include <vector>
 
 #include "plantsim/plant/config.hpp"

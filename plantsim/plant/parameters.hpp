@@ -49,11 +49,12 @@ namespace plantsim {
     "torque pulse width (crank)")                                                                  \
   X(kEngRipple, "engine.ripple", "bool", 1.0, 0.0, 1.0, "firing ripple in the output")             \
   PLANTSIM_INJECTOR(1)                                                                             \
-  PLANTSIM_INJECTOR(2) PLANTSIM_INJECTOR(3) PLANTSIM_INJECTOR(4) PLANTSIM_INJECTOR(                \
-      5) PLANTSIM_INJECTOR(6) PLANTSIM_INJECTOR(7) PLANTSIM_INJECTOR(8) PLANTSIM_INJECTOR(9)       \
-      PLANTSIM_INJECTOR(10) PLANTSIM_INJECTOR(11) PLANTSIM_INJECTOR(12) PLANTSIM_INJECTOR(13)      \
-          PLANTSIM_INJECTOR(14) PLANTSIM_INJECTOR(15) PLANTSIM_INJECTOR(16) PLANTSIM_INJECTOR(17)  \
-              PLANTSIM_INJECTOR(18) PLANTSIM_INJECTOR(19) PLANTSIM_INJECTOR(20) X(                 \
+  PLANTSIM_INJECTOR(2)                                                                             \
+  PLANTSIM_INJECTOR(3) PLANTSIM_INJECTOR(4) PLANTSIM_INJECTOR(5) PLANTSIM_INJECTOR(                \
+      6) PLANTSIM_INJECTOR(7) PLANTSIM_INJECTOR(8) PLANTSIM_INJECTOR(9) PLANTSIM_INJECTOR(10)      \
+      PLANTSIM_INJECTOR(11) PLANTSIM_INJECTOR(12) PLANTSIM_INJECTOR(13) PLANTSIM_INJECTOR(14)      \
+          PLANTSIM_INJECTOR(15) PLANTSIM_INJECTOR(16) PLANTSIM_INJECTOR(17) PLANTSIM_INJECTOR(18)  \
+              PLANTSIM_INJECTOR(19) PLANTSIM_INJECTOR(20) X(                                       \
                   kAltH, "alt.h_s", "s", 2.0, 0.05, 30.0,                                          \
                   "inertia constant H") X(kAltD, "alt.d_pu", "pu", 11.0, 0.0, 200.0, "damping D")  \
                   X(kAltE, "alt.e_pu", "pu", 1.1, 0.3, 3.0, "initial internal voltage E'") X(      \
@@ -76,23 +77,21 @@ namespace plantsim {
                                           X(kLoadPu, "load.step_pu", "pu", 0.0, -1.0, 1.0,         \
                                             "island load change from the operating point")         \
                                               X(kMeasLag, "meas.transducer_lag_s", "s", 0.003,     \
-                                                0.0001, 10.0,                                      \
-                                                "power transducer lag") X(kMeasGain, "meas.gain",  \
-                                                                          "1", 1.0, 0.0, 10.0,     \
-                                                                          "transducer gain (1 = "  \
-                                                                          "no error)")             \
-                                                  X(kMeasNoise, "meas.noise_kw", "kW", 0.0, 0.0,   \
-                                                    1e5,                                           \
-                                                    "white noise rms") X(kMeasPickup,              \
-                                                                         "meas.pickup_kw", "kW",   \
-                                                                         0.0, 0.0, 1e5,            \
-                                                                         "mains pick-up "          \
-                                                                         "amplitude")              \
-                                                      X(kMeasPickupHz,                             \
-                                                        "meas.pickup_hz", "Hz", 50.0, 1.0, 1000.0, \
-                                                        "mains pick-up frequency")                 \
-                                                          X(kMeasDrift,                            \
-                                                            "meas.drift_kw", "kW", 0.0, 0.0, 1e5,  \
+                                                0.0001, 10.0, "power transducer lag")              \
+                                                  X(kMeasGain, "meas.gain", "1", 1.0, 0.0, 10.0,   \
+                                                    "transducer gain (1 = "                        \
+                                                    "no error)") X(kMeasNoise, "meas.noise_kw",    \
+                                                                   "kW", 0.0, 0.0, 1e5,            \
+                                                                   "white noise rms")              \
+                                                      X(kMeasPickup, "meas.pickup_kw", "kW", 0.0,  \
+                                                        0.0, 1e5,                                  \
+                                                        "mains pick-up "                           \
+                                                        "amplitude") X(kMeasPickupHz,              \
+                                                                       "meas.pickup_hz", "Hz",     \
+                                                                       50.0, 1.0, 1000.0,          \
+                                                                       "mains pick-up frequency")  \
+                                                          X(kMeasDrift, "meas.drift_kw", "kW",     \
+                                                            0.0, 0.0, 1e5,                         \
                                                             "slow drift rms (Ornstein-Uhlenbeck)") \
                                                               X(kMeasDriftTau, "meas.drift_tau_s", \
                                                                 "s", 60.0, 0.1, 1e5,               \
