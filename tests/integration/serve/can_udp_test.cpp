@@ -96,6 +96,37 @@ TEST(CanUdp, LockstepFramesCommandsAndRejectedFrames) {
   EXPECT_EQ(echo_after_one_tick(*ep, mb.get()), 0);
 }
 
+// The same seed and the same frames give the same bytes back (the real plant when built).
+TEST(CanUdp, LockstepIsDeterministicForASeed) {
+  const std::string program = real_program_exists() ? real_program() : linear_program();
+  auto run = [&](const std::string& seed) {
+    std::vector<std::uint8_t> bytes;
+    auto s =
+        start_served(program, {"--can", "udp://127.0.0.1:0", "--clock", "lockstep", "--seed", seed},
+                     false, true);
+    auto ep = can_client(s.can_port);
+    if (!ep) return bytes;
+    for (int k = 0; k < 100; ++k) {
+      send(*ep, command(k < 30 ? 0.0 : 1.0, static_cast<std::uint8_t>(k & 0x0F)));
+      send(*ep, j1939::encode_lockstep(j1939::Lockstep{10}));
+      for (int got = 0; got < 10;) {
+        auto f = ep->receive(2000ms);
+        if (!f) return bytes;
+        if (j1939::pgn_of(f.value()) != j1939::kPgnPlantSample) continue;
+        bytes.insert(bytes.end(), f.value().data, f.value().data + 8);
+        ++got;
+      }
+    }
+    return bytes;
+  };
+  const auto a = run("5");
+  const auto b = run("5");
+  const auto c = run("6");
+  ASSERT_EQ(a.size(), 8000u) << program;
+  EXPECT_EQ(a, b) << program << ": seed 5 twice";
+  EXPECT_NE(a, c) << program << ": seeds 5 and 6";
+}
+
 TEST(CanUdp, RealtimeSendsSampleEveryTickEec1Every20msGtacpEvery100ms) {
   auto s = start_served(linear_program(), {"--can", "udp://127.0.0.1:0"}, false, true);
   ASSERT_GT(s.can_port, 0);
