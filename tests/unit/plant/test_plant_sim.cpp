@@ -254,3 +254,29 @@ TEST(PlantSim, FluxDecayAndAvrStartInEquilibrium) {
 
 }  // namespace
 }  // namespace plantsim
+
+namespace plantsim {
+namespace {
+
+// A large load step hits the MAP limiter (limit 0.2 + 0.9 boost below the new fuel demand
+// until the boost has built up): a fouled turbocharger (slower boost lag) slows the rise.
+double power_after(double boost_lag_s, double seconds) {
+  Params p = quiet();
+  p.set(P::kEngMapMin, 0.2, "test");
+  GensetPlant plant(p, {parse_change("engine.boost_lag_s=" + std::to_string(boost_lag_s) + "@t=0")},
+                    1, milliseconds(1));
+  plant.set_bias_pct(20.0);
+  for (int k = 0; k < static_cast<int>(seconds * 1000); ++k) plant.step();
+  return plant.electrical_power_kw();
+}
+
+TEST(PlantSim, TurboFoulingSlowsTheMapLimitedLoadRise) {
+  const double clean_kw = power_after(2.0, 1.5);
+  const double fouled_kw = power_after(6.0, 1.5);
+  std::cout << "after 1.5 s: clean " << clean_kw << " kW, fouled " << fouled_kw << " kW\n";
+  EXPECT_LT(fouled_kw, clean_kw - 50.0);
+  EXPECT_NEAR(power_after(6.0, 40.0), 3500.0 + 0.2 * 4600.0, 10.0);  // boost catches up
+}
+
+}  // namespace
+}  // namespace plantsim
