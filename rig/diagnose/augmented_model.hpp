@@ -1,0 +1,59 @@
+// The data a diagnosis works on and the output of the baseline model augmented with
+// hypotheses (effects.hpp gives the signal path).
+#pragma once
+
+#include <optional>
+#include <span>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "rig/diagnose/effects.hpp"
+#include "rig/ident/transfer_function.hpp"
+
+namespace rig::diagnose {
+
+struct Problem {
+  ident::TransferFunction tf;          // the baseline model
+  double dt_s = 0.01;
+  std::optional<double> output_rc_s;   // the recording's declared AC coupling of y only
+  Eigen::VectorXd u, y;                // operating point (mean) removed
+  Eigen::ArrayXd est_weight;           // 1 on estimation samples, else 0
+  Eigen::ArrayXd val_weight;           // 1 on validation samples, else 0
+  // Input-side effects act on [active_from, active_to) only (a fault that came and went,
+  // located in time); the baseline output elsewhere.
+  Eigen::Index active_from = 0;
+  Eigen::Index active_to = -1;         // -1: to the end
+  DataScales scales;
+  Eigen::VectorXd baseline_z;          // simulate(tf, u) before output coupling
+};
+
+struct ModelOutput {
+  Eigen::VectorXd yhat;
+  ident::TransferFunction tf;                           // the linear part as augmented
+  std::vector<std::pair<std::string, double>> derived;  // e.g. the disturbance amplitude
+};
+
+// Builds the Problem's derived fields (scales, baseline output) from tf/u/y/dt/weights.
+void finish_problem(Problem& problem);
+
+// The augmented model's output for the whole record, including a constant output offset
+// (and the periodic disturbance's amplitude and phase) fitted by least squares on the
+// estimation samples. Throws std::invalid_argument for a parameter count mismatch.
+ModelOutput model_output(const Problem& problem, std::span<const AppliedEffect> effects);
+
+// The linear part of the augmented model (dead time, lags, resonance, coupling, damping,
+// gain); effects of other kinds leave it unchanged.
+ident::TransferFunction augmented_tf(const ident::TransferFunction& tf,
+                                     std::span<const AppliedEffect> effects);
+
+// Weighted NRMSE fit (DESIGN.md 5) over the samples with weight > 0.
+double weighted_fit_pct(const Eigen::VectorXd& y, const Eigen::VectorXd& yhat,
+                        const Eigen::ArrayXd& weight);
+
+// The least damped complex pole pair (freq_hz, zeta) of tf's denominator, if any.
+std::optional<std::pair<double, double>> dominant_mode(const ident::TransferFunction& tf);
+
+}  // namespace rig::diagnose

@@ -1,0 +1,131 @@
+#include "rig/diagnose/blocks.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+#include <unsupported/Eigen/MatrixFunctions>
+
+namespace rig::diagnose {
+
+Eigen::VectorXd deadband(const Eigen::VectorXd& u, double w) {
+  return u.unaryExpr([w](double x) { return x > w ? x - w : (x < -w ? x + w : 0.0); });
+}
+
+Eigen::VectorXd backlash(const Eigen::VectorXd& u, double b) {
+  Eigen::VectorXd v(u.size());
+  double prev = u.size() > 0 ? u(0) : 0.0;
+  for (Eigen::Index k = 0; k < u.size(); ++k) {
+    prev = std::min(std::max(prev, u(k) - b), u(k) + b);
+    v(k) = prev;
+  }
+  return v;
+}
+
+Eigen::VectorXd saturate(const Eigen::VectorXd& u, double lower, double upper) {
+  return u.cwiseMax(lower).cwiseMin(upper);
+}
+
+Eigen::VectorXd rate_limit(const Eigen::VectorXd& u, double rate_per_s, double dt_s) {
+  Eigen::VectorXd v(u.size());
+  const double step = rate_per_s * dt_s;
+  double prev = u.size() > 0 ? u(0) : 0.0;
+  for (Eigen::Index k = 0; k < u.size(); ++k) {
+    prev += std::clamp(u(k) - prev, -step, step);
+    v(k) = prev;
+  }
+  return v;
+}
+
+Eigen::VectorXd polynomial(const Eigen::VectorXd& u, double c2, double c3, double sigma) {
+  const double s = std::max(sigma, 1e-300);
+  return u.unaryExpr([=](double x) { return x + c2 * x * x / s + c3 * x * x * x / (s * s); });
+}
+
+Eigen::VectorXd poly_multiply(const Eigen::VectorXd& a, const Eigen::VectorXd& b) {
+  Eigen::VectorXd c = Eigen::VectorXd::Zero(a.size() + b.size() - 1);
+  for (Eigen::Index i = 0; i < a.size(); ++i) {
+    for (Eigen::Index j = 0; j < b.size(); ++j) c(i + j) += a(i) * b(j);
+  }
+  return c;
+}
+
+Eigen::VectorXd poly_from_roots(const Eigen::VectorXcd& roots) {
+  Eigen::VectorXcd c = Eigen::VectorXcd::Ones(1);
+  for (Eigen::Index i = 0; i < roots.size(); ++i) {
+    Eigen::VectorXcd next = Eigen::VectorXcd::Zero(c.size() + 1);
+    next.head(c.size()) = c;
+    next.tail(c.size()) -= roots(i) * c;
+    c = next;
+  }
+  return c.real();
+}
+
+namespace {
+
+// Delayed input with the same linear interpolation as ident::simulate (delay d + f samples).
+Eigen::VectorXd delayed(const Eigen::VectorXd& u, double delay_s, double dt_s) {
+  const double ds = delay_s / dt_s;
+  const Eigen::Index d = static_cast<Eigen::Index>(std::floor(ds + 1e-12));
+  const double f = ds - static_cast<double>(d) < 1e-9 ? 0.0 : ds - static_cast<double>(d);
+  const Eigen::Index n = u.size();
+  auto at = [&](Eigen::Index j) { return (j >= 0 && j < n) ? u(j) : 0.0; };
+  Eigen::VectorXd out(n);
+  for (Eigen::Index k = 0; k < n; ++k) out(k) = (1.0 - f) * at(k - d) + f * at(k - d - 1);
+  return out;
+}
+
+}  // namespace
+
+Eigen::VectorXd simulate_with_feedback(const ident::TransferFunction& tf_in,
+                                       const Eigen::VectorXd& u, double dt_s,
+                                       const OutputFeedback& feedback) {
+  if (!tf_in.is_proper()) throw std::invalid_argument("simulate_with_feedback: improper tf");
+  const ident::TransferFunction tf = ident::monic(tf_in);
+  const Eigen::Index n = tf.den.size() - 1, N = u.size();
+  Eigen::VectorXd b = Eigen::VectorXd::Zero(n + 1);
+  b.tail(tf.num.size()) = tf.num;
+  const Eigen::VectorXd ud = delayed(u, tf.delay_s, dt_s);
+  Eigen::VectorXd out(N);
+  if (n == 0) {
+    for (Eigen::Index k = 0; k < N; ++k) out(k) = b(0) * (ud(k) - feedback(0.0, 0.0));
+    return out;
+  }
+  // Controllable canonical form x' = A x + e1 v, z = C x + D v, discretised exactly
+  // (zero-order hold) through exp([[A, e1], [0, 0]] dt).
+  Eigen::MatrixXd m = Eigen::MatrixXd::Zero(n + 1, n + 1);
+  m.block(0, 0, 1, n) = -tf.den.tail(n).transpose();
+  for (Eigen::Index i = 1; i < n; ++i) m(i, i - 1) = 1.0;
+  m(0, n) = 1.0;
+  const Eigen::MatrixXd e = (m * dt_s).exp();
+  const Eigen::MatrixXd phi = e.topLeftCorner(n, n);
+  const Eigen::VectorXd gamma = e.topRightCorner(n, 1);
+  const double d0 = b(0);
+  const Eigen::RowVectorXd c = b.tail(n).transpose() - d0 * tf.den.tail(n).transpose();
+  Eigen::VectorXd x = Eigen::VectorXd::Zero(n);
+  double z_prev = 0.0;
+  for (Eigen::Index k = 0; k < N; ++k) {
+    const double z = c.dot(x);
+    const double fb = feedback(z, (z - z_prev) / dt_s);
+    z_prev = z;
+    const double u_next = k + 1 < N ? ud(k + 1) : ud(k);
+    out(k) = z + d0 * (ud(k) - fb);
+    x = phi * x + gamma * (0.5 * (ud(k) + u_next) - fb);
+  }
+  return out;
+}
+
+Eigen::VectorXd smooth_zero_phase(const Eigen::VectorXd& x, double tau_s, double dt_s) {
+  const Eigen::Index n = x.size();
+  if (n == 0) return x;
+  const double a = std::exp(-dt_s / std::max(tau_s, 1e-12));
+  const Eigen::Index head = std::min<Eigen::Index>(n, std::max<Eigen::Index>(1, std::llround(tau_s / dt_s)));
+  Eigen::VectorXd f(n);
+  double s = x.head(head).mean();
+  for (Eigen::Index k = 0; k < n; ++k) f(k) = s = a * s + (1.0 - a) * x(k);
+  s = f.tail(head).mean();
+  for (Eigen::Index k = n - 1; k >= 0; --k) f(k) = s = a * s + (1.0 - a) * f(k);
+  return f;
+}
+
+}  // namespace rig::diagnose

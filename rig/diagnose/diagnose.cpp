@@ -1,0 +1,138 @@
+#include "rig/diagnose/diagnose.hpp"
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <functional>
+#include <stdexcept>
+#include <thread>
+
+#include "rig/diagnose/split.hpp"
+
+namespace rig::diagnose {
+namespace {
+
+using Candidate = std::vector<std::vector<AppliedEffect>>;  // starting points of one hypothesis
+
+Candidate single(Effect e, const Problem& pr, const Location& loc) {
+  Candidate c;
+  for (auto& p : seeds_for(e, pr, loc)) c.push_back({AppliedEffect{e, p}});
+  return c;
+}
+
+std::vector<HypothesisFit> fit_all(const Problem& pr, const std::vector<Candidate>& cands,
+                                   const Eigen::VectorXd& base, const DiagnoseOptions& o) {
+  std::vector<HypothesisFit> out(cands.size());
+  std::atomic<std::size_t> next{0};
+  auto work = [&] {
+    for (std::size_t i = next++; i < cands.size(); i = next++)
+      out[i] = fit_hypothesis(pr, cands[i], base, o.fit);
+  };
+  std::vector<std::thread> pool;
+  for (int t = 1; t < std::max(1, o.threads); ++t) pool.emplace_back(work);
+  work();
+  for (auto& t : pool) t.join();
+  return out;
+}
+
+bool has_input_side(const HypothesisFit& h) {
+  return std::any_of(h.effects.begin(), h.effects.end(),
+                     [](const AppliedEffect& e) { return kind_of(e.effect) != EffectKind::kDisturbance; });
+}
+
+std::vector<Effect> applicable(const Problem& pr, const Location& loc, const DiagnoseOptions& o) {
+  std::vector<Effect> out;
+  const auto& pool = o.effects.empty() ? std::vector<Effect>(kAllEffects.begin(), kAllEffects.end())
+                                       : o.effects;
+  for (Effect e : pool) {
+    if (e == Effect::kSensorLag) continue;  // the twin of extra_lag, told apart afterwards
+    if (e == Effect::kLoadDamping && !dominant_mode(pr.tf)) continue;
+    if (e == Effect::kPeriodicDisturbance && !loc.dist.periodic) continue;
+    if (e == Effect::kDrift && !loc.dist.drift) continue;
+    if (kind_of(e) != EffectKind::kDisturbance && !loc.input_mismatch) continue;
+    out.push_back(e);
+  }
+  return out;
+}
+
+// Pairs of the best input-side singles, and of those with a detected disturbance.
+std::vector<Candidate> pair_candidates(const std::vector<HypothesisFit>& singles) {
+  std::vector<const HypothesisFit*> inputs, dists;
+  for (const auto& h : singles) (has_input_side(h) ? inputs : dists).push_back(&h);
+  if (inputs.size() > 3) inputs.resize(3);
+  std::vector<Candidate> out;
+  for (std::size_t i = 0; i < inputs.size(); ++i) {
+    for (std::size_t j = i + 1; j < inputs.size(); ++j)
+      out.push_back({{inputs[i]->effects[0], inputs[j]->effects[0]}});
+    for (std::size_t j = 0; j < dists.size() && i < 2; ++j)
+      out.push_back({{inputs[i]->effects[0], dists[j]->effects[0]}});
+  }
+  return out;
+}
+
+void rank(std::vector<HypothesisFit>& hs) {
+  std::stable_sort(hs.begin(), hs.end(),
+                   [](const HypothesisFit& a, const HypothesisFit& b) { return a.score > b.score; });
+}
+
+int choose(const DiagnoseResult& r, double min_gain) {
+  const bool input = r.location.input_mismatch;
+  for (std::size_t i = 0; i < r.hypotheses.size(); ++i) {
+    const auto& h = r.hypotheses[i];
+    if (h.score < min_gain) break;
+    if (!input || has_input_side(h)) return static_cast<int>(i);
+  }
+  return -1;
+}
+
+// The verdict word of a chosen hypothesis: its input-side effect (the first listed, pairs
+// keep the better single first), else its disturbance.
+std::string verdict_of(const HypothesisFit& h) {
+  for (const auto& e : h.effects)
+    if (kind_of(e.effect) != EffectKind::kDisturbance) return to_string(e.effect);
+  return to_string(h.effects.front().effect);
+}
+
+}  // namespace
+
+const HypothesisFit* DiagnoseResult::chosen() const {
+  return chosen_index >= 0 ? &hypotheses[static_cast<std::size_t>(chosen_index)] : nullptr;
+}
+
+DiagnoseResult diagnose(const DiagnoseInput& in, const DiagnoseOptions& o) {
+  const auto t0 = std::chrono::steady_clock::now();
+  DiagnoseResult r;
+  r.problem = prepare_problem(in, &r.blocks, &r.warmup);
+  Problem& pr = r.problem;
+  const ModelOutput base = model_output(pr, {});
+  r.baseline_yhat = base.yhat;
+  Eigen::ArrayXd used = pr.est_weight + pr.val_weight;
+  r.fit_before_pct = weighted_fit_pct(pr.y, base.yhat, used);
+  r.validation_fit_before_pct = weighted_fit_pct(pr.y, base.yhat, pr.val_weight);
+  r.location = locate(pr, base.yhat);
+  gate_to_windows(pr, r.location);
+  if (r.location.input_mismatch || r.location.disturbance) {
+    std::vector<Candidate> cands;
+    for (Effect e : applicable(pr, r.location, o)) cands.push_back(single(e, pr, r.location));
+    r.hypotheses = fit_all(pr, cands, base.yhat, o);
+    add_sensor_lag_twin(pr, r.hypotheses, o.fit);
+    rank(r.hypotheses);
+    if (o.try_pairs && !r.hypotheses.empty() && !explains(pr, r.hypotheses.front(), r.location)) {
+      auto pairs = fit_all(pr, pair_candidates(r.hypotheses), base.yhat, o);
+      for (auto& h : pairs) r.hypotheses.push_back(std::move(h));
+      rank(r.hypotheses);
+    }
+  }
+  r.chosen_index = choose(r, o.min_gain_pct);
+  if (!r.location.input_mismatch && !r.location.disturbance) {
+    r.verdict = "none";
+  } else {
+    r.verdict = r.chosen() ? verdict_of(*r.chosen()) : "unexplained";
+  }
+  r.explanation = explain(r);
+  r.elapsed_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return r;
+}
+
+}  // namespace rig::diagnose

@@ -1,0 +1,68 @@
+// `rig diagnose`: why a model and a recording disagree (DESIGN.md section 9).
+//
+// 1. The baseline model is simulated with the recorded input (and the recording's declared
+//    AC coupling of the output); the residual r = y - yhat is located in frequency, time and
+//    amplitude and tested for whiteness and independence of the input (locate.hpp).
+// 2. When the residual is not explained by noise, every applicable effect of the hypothesis
+//    library (effects.hpp) is fitted on the estimation blocks, seeded from the location, and
+//    scored on the interleaved validation blocks (hypothesis_fit.hpp); pairs are tried when
+//    no single effect leaves an input-independent residual.
+// 3. Verdict: `none` (no test failed), the effect of the best-scoring hypothesis whose
+//    validation gain beats min_gain_pct, or `unexplained`.
+#pragma once
+
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "rig/diagnose/augmented_model.hpp"
+#include "rig/diagnose/hypothesis_fit.hpp"
+#include "rig/diagnose/locate.hpp"
+
+namespace rig::diagnose {
+
+struct DiagnoseInput {
+  ident::TransferFunction model;
+  Eigen::VectorXd u, y;                 // recorded input and output (any offset)
+  double dt_s = 0.01;
+  std::optional<double> output_rc_s;    // the output went through this AC coupling
+};
+
+struct DiagnoseOptions {
+  FitOptions fit;
+  double min_gain_pct = 0.2;            // validation score (after the penalty) to accept one
+  bool try_pairs = true;
+  int threads = 2;
+  std::vector<Effect> effects;          // empty: the whole library
+};
+
+struct DiagnoseResult {
+  std::string verdict;                  // an effect word, "none" or "unexplained"
+  std::vector<HypothesisFit> hypotheses;  // ranked by score
+  Location location;
+  std::string explanation;
+  Problem problem;                      // the data as diagnosed (means removed, split)
+  Eigen::VectorXd baseline_yhat;
+  double fit_before_pct = 0.0;          // whole record after the warm-up
+  double validation_fit_before_pct = 0.0;
+  int blocks = 0;
+  Eigen::Index warmup = 0;
+  double elapsed_s = 0.0;
+  const HypothesisFit* chosen() const;  // the hypothesis behind the verdict, if any
+  int chosen_index = -1;
+};
+
+// Throws std::invalid_argument (one line) for mismatched lengths, non-finite samples,
+// dt_s <= 0, an improper or unstable model, or a record too short to split.
+DiagnoseResult diagnose(const DiagnoseInput& input, const DiagnoseOptions& options = {});
+
+// Starting points of an effect's parameters from the location step.
+std::vector<std::vector<double>> seeds_for(Effect effect, const Problem& problem,
+                                           const Location& location);
+
+// Plain-language explanation with numbers (explain.cpp).
+std::string explain(const DiagnoseResult& result);
+
+}  // namespace rig::diagnose

@@ -1,0 +1,84 @@
+// The hypothesis library of `rig diagnose` (DESIGN.md section 9): each effect is an
+// augmentation of the baseline model with a few physical parameters.
+//
+// Signal path of an augmented model (effects of each kind compose in this order):
+//   u --> input nonlinearity N (deadband, backlash, saturation, rate_limit,
+//         static_nonlinearity) --> v
+//   v --> baseline G(s) e^{-s Td} modified by the linear effects (dead_time, extra_lag,
+//         sensor_lag, resonance, ac_coupling, load_damping, gain_change) --> z,
+//         or, with nonlinear_stiffness / coulomb_friction, the rational part in a loop
+//         with the output feedback  v' = v(t - Td) - k3 z^3 - Fc tanh(z'/eps)
+//   z --> + periodic_disturbance + drift --> the recording's own AC coupling --> yhat
+// Parameters are in physical units; their names carry the unit.
+#pragma once
+
+#include <array>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace rig::diagnose {
+
+enum class Effect {
+  kDeadTime,
+  kExtraLag,
+  kResonance,
+  kAcCoupling,
+  kSensorLag,
+  kDeadband,
+  kBacklash,
+  kSaturation,
+  kRateLimit,
+  kStaticNonlinearity,
+  kNonlinearStiffness,
+  kCoulombFriction,
+  kLoadDamping,
+  kGainChange,
+  kPeriodicDisturbance,
+  kDrift,
+};
+
+inline constexpr std::array<Effect, 16> kAllEffects = {
+    Effect::kDeadTime,           Effect::kExtraLag,         Effect::kResonance,
+    Effect::kAcCoupling,         Effect::kSensorLag,        Effect::kDeadband,
+    Effect::kBacklash,           Effect::kSaturation,       Effect::kRateLimit,
+    Effect::kStaticNonlinearity, Effect::kNonlinearStiffness, Effect::kCoulombFriction,
+    Effect::kLoadDamping,        Effect::kGainChange,       Effect::kPeriodicDisturbance,
+    Effect::kDrift};
+
+// DESIGN.md section 9 word ("dead_time", ...).
+const char* to_string(Effect effect);
+std::optional<Effect> effect_from_string(std::string_view word);
+
+enum class EffectKind { kInputNonlinearity, kLinear, kFeedback, kDisturbance };
+EffectKind kind_of(Effect effect);
+
+// One fitted parameter: bounds and whether it is searched on a log scale.
+struct ParamSpec {
+  std::string name;  // with its unit, e.g. "delay_s"
+  double lo = 0.0;
+  double hi = 1.0;
+  bool log_scale = false;
+};
+
+// The scales an effect's parameter ranges depend on.
+struct DataScales {
+  double dt_s = 0.01;
+  double duration_s = 100.0;
+  double u_std = 1.0;      // input standard deviation
+  double u_rate_std = 1.0; // standard deviation of du/dt
+  double z_std = 1.0;      // baseline model output standard deviation
+  double z_rate_std = 1.0; // standard deviation of its rate dz/dt
+  double dc_gain = 1.0;    // the baseline's static gain (its peak gain when not finite)
+  double delay_s = 0.0;    // the baseline's dead time
+};
+
+std::vector<ParamSpec> parameter_specs(Effect effect, const DataScales& scales);
+
+struct AppliedEffect {
+  Effect effect = Effect::kGainChange;
+  std::vector<double> params;  // as parameter_specs()
+};
+
+}  // namespace rig::diagnose

@@ -1,0 +1,142 @@
+#include "rig/diagnose/hypothesis_fit.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include <unsupported/Eigen/NonLinearOptimization>
+#include <unsupported/Eigen/NumericalDiff>
+
+namespace rig::diagnose {
+namespace {
+
+double logistic(double x) { return 1.0 / (1.0 + std::exp(-x)); }
+
+double to_physical(const ParamSpec& s, double x) {
+  const double t = logistic(x);
+  return s.log_scale ? std::exp(std::log(s.lo) + (std::log(s.hi) - std::log(s.lo)) * t)
+                     : s.lo + (s.hi - s.lo) * t;
+}
+
+double to_internal(const ParamSpec& s, double p) {
+  double t = s.log_scale ? (std::log(p) - std::log(s.lo)) / (std::log(s.hi) - std::log(s.lo))
+                         : (p - s.lo) / (s.hi - s.lo);
+  if (!std::isfinite(t)) t = 0.5;
+  t = std::clamp(t, 1e-3, 1.0 - 1e-3);
+  return std::log(t / (1.0 - t));
+}
+
+struct Layout {
+  std::vector<Effect> effects;
+  std::vector<std::vector<ParamSpec>> specs;
+  int size = 0;
+};
+
+std::vector<AppliedEffect> unpack(const Layout& l, const Eigen::VectorXd& x) {
+  std::vector<AppliedEffect> out;
+  int k = 0;
+  for (std::size_t i = 0; i < l.effects.size(); ++i) {
+    AppliedEffect e{l.effects[i], {}};
+    for (const auto& s : l.specs[i]) e.params.push_back(to_physical(s, x(k++)));
+    out.push_back(std::move(e));
+  }
+  return out;
+}
+
+// The least-squares functor Eigen's LevenbergMarquardt expects.
+struct Residual {
+  using Scalar = double;
+  using InputType = Eigen::VectorXd;
+  using ValueType = Eigen::VectorXd;
+  using JacobianType = Eigen::MatrixXd;
+  enum { InputsAtCompileTime = Eigen::Dynamic, ValuesAtCompileTime = Eigen::Dynamic };
+
+  const Problem* problem;
+  const Layout* layout;
+  std::vector<Eigen::Index> rows;  // estimation samples
+  int* calls = nullptr;  // shared by the copies NumericalDiff makes
+
+  int inputs() const { return layout->size; }
+  int values() const { return static_cast<int>(rows.size()); }
+  int operator()(const Eigen::VectorXd& x, Eigen::VectorXd& f) const {
+    ++*calls;
+    const auto effects = unpack(*layout, x);
+    const Eigen::VectorXd yhat = model_output(*problem, effects).yhat;
+    f.resize(values());
+    for (std::size_t i = 0; i < rows.size(); ++i) {
+      const Eigen::Index k = rows[i];
+      f(static_cast<Eigen::Index>(i)) = problem->y(k) - yhat(k);
+    }
+    if (!f.allFinite()) f.setConstant(1e150);
+    return 0;
+  }
+};
+
+}  // namespace
+
+std::string HypothesisFit::name() const {
+  std::string s;
+  for (const auto& e : effects) {
+    if (!s.empty()) s.push_back('+');
+    s.append(to_string(e.effect));
+  }
+  return s;
+}
+
+int HypothesisFit::parameter_count() const {
+  int n = 0;
+  for (const auto& e : effects) {
+    n += static_cast<int>(e.params.size());
+    if (e.effect == Effect::kPeriodicDisturbance) n += 2;  // amplitude and phase by LS
+  }
+  return n;
+}
+
+HypothesisFit fit_hypothesis(const Problem& pr, const std::vector<std::vector<AppliedEffect>>& starts,
+                             const Eigen::VectorXd& baseline_yhat, const FitOptions& options) {
+  Layout layout;
+  for (const auto& e : starts.front()) {
+    layout.effects.push_back(e.effect);
+    layout.specs.push_back(parameter_specs(e.effect, pr.scales));
+    layout.size += static_cast<int>(layout.specs.back().size());
+  }
+  int calls = 0;
+  Residual fn{&pr, &layout, {}, &calls};
+  for (Eigen::Index k = 0; k < pr.y.size(); ++k)
+    if (pr.est_weight(k) > 0.0) fn.rows.push_back(k);
+  double best_cost = std::numeric_limits<double>::infinity();
+  Eigen::VectorXd best_x;
+  for (const auto& start : starts) {
+    Eigen::VectorXd x(layout.size);
+    int k = 0;
+    for (std::size_t i = 0; i < start.size(); ++i)
+      for (std::size_t j = 0; j < start[i].params.size(); ++j)
+        x(k++) = to_internal(layout.specs[i][j], start[i].params[j]);
+    Eigen::NumericalDiff<Residual> diff(fn);
+    Eigen::LevenbergMarquardt<Eigen::NumericalDiff<Residual>> lm(diff);
+    lm.parameters.maxfev = options.max_evaluations;
+    lm.parameters.xtol = 1e-6;
+    lm.parameters.ftol = 1e-7;
+    lm.minimize(x);
+    Eigen::VectorXd f;
+    fn(x, f);
+    const double cost = f.squaredNorm();
+    if (cost < best_cost) best_cost = cost, best_x = x;
+  }
+  HypothesisFit h;
+  h.effects = unpack(layout, best_x);
+  ModelOutput mo = model_output(pr, h.effects);
+  h.yhat = std::move(mo.yhat);
+  h.tf = mo.tf;
+  h.derived = std::move(mo.derived);
+  h.evaluations = calls;
+  h.fit_before = weighted_fit_pct(pr.y, baseline_yhat, pr.est_weight);
+  h.fit_after = weighted_fit_pct(pr.y, h.yhat, pr.est_weight);
+  h.validation_fit_before = weighted_fit_pct(pr.y, baseline_yhat, pr.val_weight);
+  h.validation_fit_after = weighted_fit_pct(pr.y, h.yhat, pr.val_weight);
+  h.score = h.validation_fit_after - h.validation_fit_before -
+            options.penalty_pct_per_parameter * h.parameter_count();
+  return h;
+}
+
+}  // namespace rig::diagnose

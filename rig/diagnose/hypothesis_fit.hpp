@@ -1,0 +1,47 @@
+// Fitting a hypothesis (one effect or a pair) to a recording by nonlinear least squares
+// (Levenberg-Marquardt, Eigen's MINPACK port, forward-difference Jacobian) on the estimation
+// samples, and scoring it on the validation samples.
+//
+// Bounds: each parameter p in [lo, hi] is searched through an unbounded x,
+//   p = lo + (hi - lo) / (1 + e^{-x})         (linear parameters)
+//   ln p = ln lo + (ln hi - ln lo) / (1 + e^{-x})   (log-scale parameters)
+// so every trial point is admissible. Several starting points (from the location step and
+// the parameter range) are tried; the lowest estimation cost wins.
+// Score = validation fit gain - penalty_pct_per_parameter * parameters (percentage points).
+#pragma once
+
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "rig/diagnose/augmented_model.hpp"
+
+namespace rig::diagnose {
+
+struct HypothesisFit {
+  std::vector<AppliedEffect> effects;
+  double fit_before = 0.0, fit_after = 0.0;                        // estimation samples, %
+  double validation_fit_before = 0.0, validation_fit_after = 0.0;  // validation samples, %
+  double score = 0.0;
+  std::vector<std::pair<std::string, double>> derived;
+  int evaluations = 0;
+  Eigen::VectorXd yhat;  // the augmented model's output over the whole record
+  ident::TransferFunction tf;
+
+  std::string name() const;  // "dead_time" or "dead_time+drift"
+  int parameter_count() const;
+};
+
+struct FitOptions {
+  double penalty_pct_per_parameter = 0.25;
+  int max_evaluations = 120;  // model simulations per start
+};
+
+// `starts`: initial parameter sets of the same effects (at least one).
+HypothesisFit fit_hypothesis(const Problem& problem,
+                             const std::vector<std::vector<AppliedEffect>>& starts,
+                             const Eigen::VectorXd& baseline_yhat, const FitOptions& options);
+
+}  // namespace rig::diagnose

@@ -1,0 +1,99 @@
+// Disturbance tests and the whole location step.
+//
+// Periodic: a residual spectral line, PSD over the median of its neighbours (+-8 bins
+// without +-1) above 12, at a bin where the residual is not coherent with the input. For M
+// averaged segments the ratio of white noise is about chi^2(2M)/2M, so 12 is far beyond
+// chance; the line's frequency is then refined by maximising |sum r_t e^{-j w t}| on a fine
+// grid (+-1.5 bins).
+// Drift: the residual smoothed over tau_d = max(50 dt, T/40) carries more than 10 % of its
+// variance and 30 times what white noise would leave (dt / tau_d), and is not the smoothed
+// model output's shadow (|corr| < 0.3; a missing low-frequency dynamic would be).
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+
+#include "rig/diagnose/blocks.hpp"
+#include "rig/diagnose/locate.hpp"
+
+namespace rig::diagnose {
+namespace {
+
+double line_power(const Problem& pr, const Eigen::VectorXd& r, double f) {
+  std::complex<double> acc = 0.0;
+  const double w = 2.0 * std::numbers::pi * f * pr.dt_s;
+  for (Eigen::Index k = 0; k < r.size(); ++k)
+    if (pr.est_weight(k) > 0.0) acc += r(k) * std::polar(1.0, -w * static_cast<double>(k));
+  return std::norm(acc);
+}
+
+void find_line(const Problem& pr, const Eigen::VectorXd& r, const FrequencyLocation& fl,
+               Disturbances& d) {
+  const auto& b = fl.bins;
+  const int nb = static_cast<int>(b.size());
+  for (int k = 2; k + 2 < nb; ++k) {
+    if (b[static_cast<std::size_t>(k)].significant) continue;
+    std::vector<double> nbr;
+    for (int j = std::max(0, k - 8); j <= std::min(nb - 1, k + 8); ++j)
+      if (std::abs(j - k) > 1) nbr.push_back(b[static_cast<std::size_t>(j)].residual_psd);
+    std::nth_element(nbr.begin(), nbr.begin() + static_cast<long>(nbr.size() / 2), nbr.end());
+    const double ratio = b[static_cast<std::size_t>(k)].residual_psd / std::max(nbr[nbr.size() / 2], 1e-300);
+    if (ratio > d.line_ratio) d.line_ratio = ratio, d.line_freq_hz = b[static_cast<std::size_t>(k)].freq_hz;
+  }
+  d.periodic = d.line_ratio > 12.0;
+  if (!d.periodic || nb < 2) return;
+  const double df = b[1].freq_hz - b[0].freq_hz;
+  double best = -1.0, f0 = d.line_freq_hz;
+  for (int i = -30; i <= 30; ++i) {
+    const double f = f0 + 1.5 * df * i / 30.0;
+    const double p = line_power(pr, r, f);
+    if (p > best) best = p, d.line_freq_hz = f;
+  }
+}
+
+double corr(const Eigen::VectorXd& a, const Eigen::VectorXd& b) {
+  const Eigen::VectorXd x = a.array() - a.mean(), y = b.array() - b.mean();
+  const double d = std::sqrt(x.squaredNorm() * y.squaredNorm());
+  return d > 0.0 ? x.dot(y) / d : 0.0;
+}
+
+}  // namespace
+
+Disturbances locate_disturbances(const Problem& pr, const Eigen::VectorXd& r,
+                                 const FrequencyLocation& fl) {
+  Disturbances d;
+  find_line(pr, r, fl, d);
+  Eigen::Index from = 0;
+  while (from < r.size() && pr.est_weight(from) + pr.val_weight(from) <= 0.0) ++from;
+  const Eigen::VectorXd rs = r.tail(r.size() - from);
+  d.drift_tau_s = std::max(50.0 * pr.dt_s, pr.scales.duration_s / 40.0);
+  const Eigen::VectorXd s = smooth_zero_phase(rs, d.drift_tau_s, pr.dt_s);
+  const double vr = (rs.array() - rs.mean()).square().mean();
+  const double vs = (s.array() - s.mean()).square().mean();
+  d.drift_ratio = vr > 0.0 ? vs / vr : 0.0;
+  const Eigen::VectorXd zs =
+      smooth_zero_phase(pr.baseline_z.tail(r.size() - from), d.drift_tau_s, pr.dt_s);
+  d.drift = d.drift_ratio > 0.1 && d.drift_ratio > 30.0 * pr.dt_s / d.drift_tau_s &&
+            std::abs(corr(s, zs)) < 0.3;
+  return d;
+}
+
+Location locate(const Problem& pr, const Eigen::VectorXd& yhat) {
+  Location loc;
+  const Eigen::VectorXd r = pr.y - yhat;
+  loc.freq = locate_frequency(pr, r);
+  loc.windows = locate_time(pr, r);
+  loc.amp = locate_amplitude(pr, r, yhat);
+  Eigen::Index from = 0;
+  while (from < r.size() && pr.est_weight(from) + pr.val_weight(from) <= 0.0) ++from;
+  const double band = std::max(loc.freq.input_band_hz, 1.0 / pr.scales.duration_s);
+  const auto lags = std::clamp<Eigen::Index>(std::llround(2.0 / (band * pr.dt_s)), 25, 200);
+  loc.tests = residual_tests(r.tail(r.size() - from), pr.u.tail(r.size() - from), pr.dt_s, lags);
+  loc.dist = locate_disturbances(pr, r, loc.freq);
+  loc.input_mismatch = loc.freq.band_hz.has_value() || !loc.tests.independent ||
+                       loc.amp.amplitude_dependent || loc.amp.sign_dependent ||
+                       loc.amp.direction_dependent;
+  loc.disturbance = loc.dist.periodic || loc.dist.drift;
+  return loc;
+}
+
+}  // namespace rig::diagnose

@@ -1,0 +1,196 @@
+// Time and amplitude location of the residual r = y - yhat.
+//
+// Time: windows of W samples; under stationarity ln(mean r^2) varies little between
+// windows. A window is out of bounds when its ln mean square exceeds the quiet level (from
+// the lower quartile) by more than 4.5 standard deviations and its rms by 15 %.
+//
+// Amplitude: the input is split by level |u| into five quantile bands u_i (u inside the band,
+// zero outside) and r is regressed on X_i = G u_i, so y = sum (1 + beta_i) G u_i: the gain
+// each input level sees. A linear mismatch gives equal beta_i, a static nonlinearity not.
+// The F statistic of "one common gain" against "five gains", scaled by the residual's
+// autocorrelation (Bartlett factor c = 1 + 2 sum_k rho_r(k) rho_yhat(k), N_eff = N / c), is
+// compared with chi^2(4) at alpha = 0.001. Sign: the same with u >= 0 and u < 0 (|z| > 4).
+// Direction: r regressed on [yhat, G sign(du/dt)] (play or friction); |z| > 4.
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+
+#include <limits>
+
+#include <Eigen/Dense>
+
+#include "rig/diagnose/locate.hpp"
+#include "rig/signal/ac_coupling.hpp"
+
+namespace rig::diagnose {
+namespace {
+
+double quantile(std::vector<double> v, double q) {
+  if (v.empty()) return 0.0;
+  const auto k = static_cast<std::size_t>(q * static_cast<double>(v.size() - 1));
+  std::nth_element(v.begin(), v.begin() + static_cast<long>(k), v.end());
+  return v[k];
+}
+
+// 1 + 2 sum_k rho_a(k) rho_b(k) over k = 1..max_lag on the used samples.
+double bartlett_factor(const Eigen::VectorXd& a, const Eigen::VectorXd& b, Eigen::Index lags) {
+  const Eigen::Index n = a.size();
+  const double aa = a.squaredNorm(), bb = b.squaredNorm();
+  if (aa <= 0.0 || bb <= 0.0) return 1.0;
+  double c = 1.0;
+  for (Eigen::Index k = 1; k <= std::min(lags, n - 1); ++k) {
+    const double ra = a.head(n - k).dot(a.tail(n - k)) / aa;
+    const double rb = b.head(n - k).dot(b.tail(n - k)) / bb;
+    c += 2.0 * ra * rb;
+  }
+  return std::max(c, 1.0);
+}
+
+double z_of(const LevelBin& a, const LevelBin& b) {
+  const double s = std::hypot(a.gain_std, b.gain_std);
+  return s > 0.0 ? (a.gain - b.gain) / s : 0.0;
+}
+
+}  // namespace
+
+std::vector<TimeWindow> locate_time(const Problem& pr, const Eigen::VectorXd& r_all) {
+  Eigen::Index start = 0;  // after the warm-up
+  const Eigen::Index n = r_all.size();
+  while (start < n && pr.est_weight(start) + pr.val_weight(start) <= 0.0) ++start;
+  const Eigen::VectorXd r = r_all.tail(n - start);
+  const Eigen::Index w = std::max<Eigen::Index>(64, r.size() / 40);
+  std::vector<double> lms;
+  for (Eigen::Index k = 0; k + w <= r.size(); k += w)
+    lms.push_back(std::log(r.segment(k, w).squaredNorm() / static_cast<double>(w) + 1e-300));
+  std::vector<TimeWindow> out;
+  if (lms.size() < 4) return out;
+  // Spread of ln(mean square) over W correlated samples: var = 2 c / W with
+  // c = 1 + 2 sum rho_r(k)^2 (Bartlett), widened by half for the residual's non-Gaussianity.
+  // c from the quiet windows (lower half), so a located effect does not widen its own bounds.
+  const double q50 = quantile(lms, 0.5);
+  double c_sum = 0.0;
+  int quiet = 0;
+  for (std::size_t i = 0; i < lms.size(); ++i)
+    if (lms[i] <= q50) {
+      const Eigen::VectorXd seg = r.segment(static_cast<Eigen::Index>(i) * w, w);
+      c_sum += bartlett_factor(seg, seg, std::min<Eigen::Index>(200, w / 4)), ++quiet;
+    }
+  const double c = quiet > 0 ? c_sum / quiet : 1.0;
+  const double s = 1.5 * std::sqrt(2.0 * c / static_cast<double>(w));
+  // Reference: the lower quartile is 0.67 standard deviations below the quiet windows' mean.
+  const double ref = quantile(lms, 0.25) + 0.67 * s;
+  for (std::size_t i = 0; i < lms.size(); ++i) {
+    const double excess = lms[i] - ref;
+    if (excess <= 4.5 * s || excess <= 2.0 * std::log(1.15)) continue;
+    const double t0 = static_cast<double>(start + static_cast<Eigen::Index>(i) * w) * pr.dt_s;
+    const double t1 = t0 + static_cast<double>(w) * pr.dt_s;
+    const double ratio = std::exp(0.5 * excess);
+    if (!out.empty() && std::abs(out.back().to_s - t0) < 1e-9) {
+      out.back().to_s = t1;
+      out.back().rms_ratio = std::max(out.back().rms_ratio, ratio);
+    } else {
+      out.push_back({t0, t1, ratio});
+    }
+  }
+  return out;
+}
+
+namespace {
+
+// Least squares r = X beta on the used rows; returns beta, the residual sum of squares and
+// (X'X)^-1.
+struct Ls {
+  Eigen::VectorXd beta;
+  double rss = 0.0;
+  Eigen::MatrixXd inv;
+};
+
+Ls least_squares(const Eigen::MatrixXd& x, const Eigen::VectorXd& r) {
+  Ls out;
+  const Eigen::MatrixXd xtx = x.transpose() * x;
+  out.inv = xtx.completeOrthogonalDecomposition().pseudoInverse();
+  out.beta = out.inv * (x.transpose() * r);
+  out.rss = (r - x * out.beta).squaredNorm();
+  return out;
+}
+
+// The baseline's response to u restricted by a mask (u outside the mask set to zero).
+Eigen::VectorXd masked_response(const Problem& pr, const Eigen::VectorXd& u) {
+  Eigen::VectorXd z = ident::simulate(pr.tf, u, pr.dt_s);
+  if (pr.output_rc_s) z = signal::ac_couple(z, pr.dt_s, *pr.output_rc_s);
+  return z;
+}
+
+}  // namespace
+
+AmplitudeLocation locate_amplitude(const Problem& pr, const Eigen::VectorXd& r_all,
+                                   const Eigen::VectorXd& yh_all) {
+  AmplitudeLocation a;
+  const Eigen::Index n = r_all.size();
+  Eigen::Index from = 0;
+  while (from < n && pr.est_weight(from) + pr.val_weight(from) <= 0.0) ++from;
+  const Eigen::Index m = n - from;
+  if (m < 64) return a;
+  const Eigen::VectorXd r = r_all.tail(m), yh = yh_all.tail(m);
+  const double c = bartlett_factor(r, yh, std::min<Eigen::Index>(200, m / 4));
+  std::vector<double> mags;
+  for (Eigen::Index k = from; k < n; ++k) mags.push_back(std::abs(pr.u(k)));
+  const int nb = 5;
+  std::vector<double> edges;
+  for (int b = 1; b < nb; ++b) edges.push_back(quantile(mags, static_cast<double>(b) / nb));
+  edges.push_back(std::numeric_limits<double>::infinity());
+  // Level-band regressors X_i = G (u 1{|u| in band i}): y = sum (1 + beta_i) X_i + noise.
+  Eigen::MatrixXd xl(m, nb);
+  std::vector<double> level_ss(nb, 0.0), level_n(nb, 0.0);
+  for (int b = 0; b < nb; ++b) {
+    Eigen::VectorXd ub = Eigen::VectorXd::Zero(n);
+    const double lo = b == 0 ? -1.0 : edges[static_cast<std::size_t>(b - 1)], hi = edges[static_cast<std::size_t>(b)];
+    for (Eigen::Index k = 0; k < n; ++k) {
+      const double au = std::abs(pr.u(k));
+      if (au > lo && au <= hi) {
+        ub(k) = pr.u(k);
+        if (k >= from) level_ss[static_cast<std::size_t>(b)] += au * au, level_n[static_cast<std::size_t>(b)] += 1.0;
+      }
+    }
+    xl.col(b) = masked_response(pr, ub).tail(m);
+  }
+  const double n_eff = static_cast<double>(m) / c;
+  const Ls one = least_squares(yh, r), full = least_squares(xl, r);
+  const double s2 = full.rss / std::max(1.0, n_eff - nb);
+  for (int b = 0; b < nb; ++b) {
+    LevelBin bin;
+    bin.level = std::sqrt(level_ss[static_cast<std::size_t>(b)] / std::max(1.0, level_n[static_cast<std::size_t>(b)]));
+    bin.gain = 1.0 + full.beta(b);
+    bin.gain_std = std::sqrt(std::max(0.0, s2 * c * full.inv(b, b)) / c);
+    a.by_level.push_back(bin);
+  }
+  a.level_chi2 = (one.rss - full.rss) / std::max(s2, 1e-300);
+  // Sign: X+ = G(u 1{u >= 0}), X- = G(u 1{u < 0}).
+  Eigen::MatrixXd xs(m, 2);
+  xs.col(0) = masked_response(pr, pr.u.cwiseMax(0.0)).tail(m);
+  xs.col(1) = masked_response(pr, pr.u.cwiseMin(0.0)).tail(m);
+  const Ls sign = least_squares(xs, r);
+  const double s2s = sign.rss / std::max(1.0, n_eff - 2);
+  a.positive = {std::sqrt(pr.u.cwiseMax(0.0).squaredNorm() / static_cast<double>(n)), 1 + sign.beta(0), std::sqrt(s2s * sign.inv(0, 0))};
+  a.negative = {std::sqrt(pr.u.cwiseMin(0.0).squaredNorm() / static_cast<double>(n)), 1 + sign.beta(1), std::sqrt(s2s * sign.inv(1, 1))};
+  a.sign_z = z_of(a.positive, a.negative);
+  // Direction: play or friction adds -b sign(du/dt) before the plant: regressor G(sign(du)).
+  Eigen::VectorXd sdu = Eigen::VectorXd::Zero(n);
+  for (Eigen::Index k = 1; k < n; ++k) sdu(k) = pr.u(k) > pr.u(k - 1) ? 1.0 : (pr.u(k) < pr.u(k - 1) ? -1.0 : 0.0);
+  Eigen::MatrixXd xd(m, 2);
+  xd.col(0) = yh;
+  xd.col(1) = masked_response(pr, sdu).tail(m);
+  const Ls dir = least_squares(xd, r);
+  const double s2d = dir.rss / std::max(1.0, n_eff - 2);
+  const double sd = std::sqrt(std::max(1e-300, s2d * dir.inv(1, 1)));
+  a.direction_z = dir.beta(1) / sd;
+  a.rising = {0.0, dir.beta(1), sd};  // the play: -beta is the half-width in input units
+  a.falling = {0.0, -dir.beta(1), sd};
+  const double spread = a.by_level.back().gain - a.by_level.front().gain;
+  a.amplitude_dependent = a.level_chi2 > 18.47 && std::abs(spread) > 0.02;
+  a.sign_dependent = std::abs(a.sign_z) > 4.0;
+  a.direction_dependent = std::abs(a.direction_z) > 4.0;
+  return a;
+}
+
+}  // namespace rig::diagnose

@@ -1,0 +1,132 @@
+#include <string>
+
+#include "rig/diagnose/report_out.hpp"
+#include "rig/report/json_out.hpp"
+
+namespace rig::diagnose {
+namespace {
+
+using nlohmann::json;
+using report::number_or_null;
+
+json hypothesis_json(const HypothesisFit& h, const Problem& pr) {
+  json params = json::object(), effects = json::array();
+  for (const auto& e : h.effects) {
+    const auto specs = parameter_specs(e.effect, pr.scales);
+    json p = json::object();
+    for (std::size_t i = 0; i < e.params.size(); ++i) {
+      p[specs[i].name] = number_or_null(e.params[i]);
+      params[h.effects.size() > 1 ? std::string(to_string(e.effect)) + "." + specs[i].name : specs[i].name] =
+          number_or_null(e.params[i]);
+    }
+    effects.push_back({{"effect", to_string(e.effect)}, {"params", p}});
+  }
+  json derived = json::object();
+  for (const auto& [k, v] : h.derived) derived[k] = number_or_null(v);
+  return {{"effect", h.name()},
+          {"effects", effects},
+          {"params", params},
+          {"derived", derived},
+          {"fit_before", number_or_null(h.fit_before)},
+          {"fit_after", number_or_null(h.fit_after)},
+          {"validation_fit_before", number_or_null(h.validation_fit_before)},
+          {"validation_fit_after", number_or_null(h.validation_fit_after)},
+          {"score", number_or_null(h.score)},
+          {"parameters", h.parameter_count()},
+          {"evaluations", h.evaluations}};
+}
+
+json location_json(const DiagnoseResult& r) {
+  const Location& loc = r.location;
+  json windows = json::array();
+  for (const auto& w : loc.windows)
+    windows.push_back({{"from_s", w.from_s}, {"to_s", w.to_s}, {"rms_ratio", w.rms_ratio}});
+  json levels = json::array();
+  for (const auto& b : loc.amp.by_level)
+    levels.push_back({{"level", b.level}, {"gain", b.gain}, {"gain_std", b.gain_std}});
+  json band = loc.freq.band_hz ? json::array({loc.freq.band_hz->first, loc.freq.band_hz->second})
+                               : json(nullptr);
+  return {{"band_hz", band},
+          {"time_windows", windows},
+          {"amplitude_dependent", loc.amp.amplitude_dependent || loc.amp.sign_dependent ||
+                                      loc.amp.direction_dependent},
+          {"amplitude", {{"by_level", levels},
+                         {"level_chi2", loc.amp.level_chi2},
+                         {"level_dependent", loc.amp.amplitude_dependent},
+                         {"sign_z", loc.amp.sign_z},
+                         {"sign_dependent", loc.amp.sign_dependent},
+                         {"direction_z", loc.amp.direction_z},
+                         {"direction_dependent", loc.amp.direction_dependent}}},
+          {"residual_tests", {{"whiteness_ratio", loc.tests.whiteness_ratio},
+                              {"white", loc.tests.white},
+                              {"cross_ratio", loc.tests.cross_ratio},
+                              {"cross_threshold", loc.tests.cross_threshold},
+                              {"cross_peak_lag_s", loc.tests.cross_peak_lag_s},
+                              {"independent", loc.tests.independent}}},
+          {"disturbances", {{"periodic", loc.dist.periodic},
+                            {"line_freq_hz", loc.dist.line_freq_hz},
+                            {"line_ratio", loc.dist.line_ratio},
+                            {"drift", loc.dist.drift},
+                            {"drift_ratio", loc.dist.drift_ratio}}},
+          {"coherence_threshold", loc.freq.coherence_threshold},
+          {"input_band_hz", loc.freq.input_band_hz},
+          {"active_span_s", {static_cast<double>(r.problem.active_from) * r.problem.dt_s,
+                             static_cast<double>(r.problem.active_to) * r.problem.dt_s}}};
+}
+
+}  // namespace
+
+nlohmann::json report_json(const DiagnoseResult& r, const ReportContext& c) {
+  json hyps = json::array();
+  for (const auto& h : r.hypotheses) hyps.push_back(hypothesis_json(h, r.problem));
+  return {{"command", "diagnose"},
+          {"recording", c.recording},
+          {"model", c.model},
+          {"input", c.input_column},
+          {"output", c.output_column},
+          {"verdict", r.verdict},
+          {"explanation", r.explanation},
+          {"chosen", r.chosen_index >= 0 ? json(r.chosen_index) : json(nullptr)},
+          {"hypotheses", hyps},
+          {"location", location_json(r)},
+          {"fit_before", number_or_null(r.fit_before_pct)},
+          {"validation_fit_before", number_or_null(r.validation_fit_before_pct)},
+          {"samples", r.problem.u.size()},
+          {"dt_s", r.problem.dt_s},
+          {"blocks", r.blocks},
+          {"warmup_s", static_cast<double>(r.warmup) * r.problem.dt_s},
+          {"output_coupling_rc_s", r.problem.output_rc_s ? json(*r.problem.output_rc_s) : json(nullptr)},
+          {"elapsed_s", r.elapsed_s},
+          {"augmented_model", "augmented_model.json"}};
+}
+
+io::ModelFile augmented_model(const DiagnoseResult& r, const io::ModelFile& baseline) {
+  io::ModelFile m = baseline;
+  m.cov.reset();
+  json aug = json::array();
+  if (const HypothesisFit* h = r.chosen()) {
+    m.tf = h->tf;
+    m.fit_percent = h->validation_fit_after;
+    for (const auto& e : h->effects) {
+      const auto specs = parameter_specs(e.effect, r.problem.scales);
+      json p = json::object();
+      for (std::size_t i = 0; i < e.params.size(); ++i) p[specs[i].name] = e.params[i];
+      const char* where = kind_of(e.effect) == EffectKind::kInputNonlinearity ? "input, before the tf"
+                          : kind_of(e.effect) == EffectKind::kFeedback ? "output feedback around the tf's rational part"
+                          : kind_of(e.effect) == EffectKind::kDisturbance ? "added to the output"
+                                                                          : "in num/den/delay_s";
+      aug.push_back({{"effect", to_string(e.effect)}, {"params", p}, {"acts", where}});
+    }
+    json derived = json::object();
+    for (const auto& [k, v] : h->derived) derived[k] = report::number_or_null(v);
+    m.extra["augmentation_derived"] = derived;
+  }
+  m.extra["augmentation"] = aug;
+  m.extra["baseline"] = {{"num", report::to_json_array(baseline.tf.num)},
+                         {"den", report::to_json_array(baseline.tf.den)},
+                         {"delay_s", baseline.tf.delay_s}};
+  m.extra["diagnose_verdict"] = r.verdict;
+  return m;
+}
+
+}  // namespace rig::diagnose

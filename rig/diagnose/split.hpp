@@ -1,0 +1,32 @@
+// Steps of diagnose() that prepare and post-process the data (split.cpp).
+#pragma once
+
+#include <vector>
+
+#include "rig/diagnose/diagnose.hpp"
+
+namespace rig::diagnose {
+
+// Validates the input (one-line std::invalid_argument), removes the means, and splits the
+// record after a warm-up (4 slowest time constants + dead time, at most 10 %) into
+// interleaved blocks: even blocks estimate, odd blocks validate. Interleaving keeps a fault
+// that appears part-way through the record in both sets.
+Problem prepare_problem(const DiagnoseInput& input, int* blocks, Eigen::Index* warmup);
+
+// When the residual leaves its bounds only in part of the record (5-75 % of it, mostly
+// contiguous), input-side effects are fitted on that span only.
+void gate_to_windows(Problem& problem, const Location& location);
+
+// extra_lag and sensor_lag act alike on the input; a sensor lag also filters the noise.
+// The residual after the lag is fitted tells them apart: its PSD above 2 fc over its PSD
+// below fc/2 (fc = 1/(2 pi T)) is about 1 for noise that bypassed the lag and about
+// |1/(1 + j 3)|^2 = 0.1 for noise inside it. The unsupported twin loses one parameter's
+// penalty.
+void add_sensor_lag_twin(const Problem& problem, std::vector<HypothesisFit>& hypotheses,
+                         const FitOptions& fit);
+
+// True when the hypothesis leaves a residual independent of the input (resid test) and
+// includes every detected disturbance.
+bool explains(const Problem& problem, const HypothesisFit& h, const Location& location);
+
+}  // namespace rig::diagnose

@@ -1,0 +1,85 @@
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "rig/diagnose/blocks.hpp"
+#include "rig/diagnose/concealed.hpp"
+#include "rig/signal/excitation.hpp"
+
+namespace rig::diagnose {
+namespace {
+
+Eigen::VectorXd v(std::initializer_list<double> x) {
+  Eigen::VectorXd out(static_cast<Eigen::Index>(x.size()));
+  Eigen::Index i = 0;
+  for (double e : x) out(i++) = e;
+  return out;
+}
+
+TEST(Blocks, DeadbandRemovesTheBandAndShiftsOutside) {
+  const Eigen::VectorXd y = deadband(v({-2.0, -0.5, 0.0, 0.4, 1.5}), 0.5);
+  EXPECT_DOUBLE_EQ(y(0), -1.5);
+  EXPECT_DOUBLE_EQ(y(1), 0.0);
+  EXPECT_DOUBLE_EQ(y(3), 0.0);
+  EXPECT_DOUBLE_EQ(y(4), 1.0);
+}
+
+TEST(Blocks, BacklashHoldsUntilThePlayIsTakenUp) {
+  // Rise to 2, reverse: the output stays at 1.5 until the input falls below 1.0.
+  const Eigen::VectorXd y = backlash(v({0.0, 1.0, 2.0, 1.5, 1.0, 0.0}), 0.5);
+  EXPECT_DOUBLE_EQ(y(2), 1.5);
+  EXPECT_DOUBLE_EQ(y(3), 1.5);
+  EXPECT_DOUBLE_EQ(y(4), 1.5);
+  EXPECT_DOUBLE_EQ(y(5), 0.5);
+}
+
+TEST(Blocks, SaturationAndRateLimit) {
+  const Eigen::VectorXd s = saturate(v({-3.0, 0.2, 3.0}), -1.0, 2.0);
+  EXPECT_DOUBLE_EQ(s(0), -1.0);
+  EXPECT_DOUBLE_EQ(s(2), 2.0);
+  // A unit step through a 10 /s limit at dt = 0.01 climbs 0.1 per sample.
+  const Eigen::VectorXd r = rate_limit(v({0.0, 1.0, 1.0, 1.0}), 10.0, 0.01);
+  EXPECT_NEAR(r(1), 0.1, 1e-12);
+  EXPECT_NEAR(r(3), 0.3, 1e-12);
+}
+
+TEST(Blocks, PolyFromRootsRebuildsAQuadratic) {
+  Eigen::VectorXcd roots(2);
+  roots << std::complex<double>(-1.0, 2.0), std::complex<double>(-1.0, -2.0);
+  const Eigen::VectorXd p = poly_from_roots(roots);  // s^2 + 2 s + 5
+  EXPECT_NEAR(p(0), 1.0, 1e-12);
+  EXPECT_NEAR(p(1), 2.0, 1e-12);
+  EXPECT_NEAR(p(2), 5.0, 1e-12);
+}
+
+TEST(Blocks, FeedbackSimulationWithoutFeedbackMatchesExactSimulation) {
+  const ident::TransferFunction tf = nominal_genset_model();
+  signal::GaussianOptions go;
+  go.n = 6000, go.dt_s = 0.01, go.bandwidth_hz = 4.0, go.seed = 3;
+  const Eigen::VectorXd u = signal::gaussian_excitation(go);
+  const Eigen::VectorXd exact = ident::simulate(tf, u, 0.01);
+  const Eigen::VectorXd loop = simulate_with_feedback(tf, u, 0.01, [](double, double) { return 0.0; });
+  // Mid-sample zero-order hold versus first-order hold: second order in dt.
+  EXPECT_LT((exact - loop).norm() / exact.norm(), 5e-3);
+}
+
+TEST(Blocks, CubicFeedbackStiffensTheResponse) {
+  ident::TransferFunction tf{v({1.0}), v({1.0, 0.5, 1.0}), 0.0};  // unit static gain
+  const Eigen::VectorXd u = Eigen::VectorXd::Constant(8000, 2.0);
+  // Static equilibrium z = u - k3 z^3 with k3 = 0.25: z^3/4 + z - 2 = 0, solved by Newton.
+  double zs = 1.0;
+  for (int i = 0; i < 50; ++i) zs -= (0.25 * zs * zs * zs + zs - 2.0) / (0.75 * zs * zs + 1.0);
+  const Eigen::VectorXd z = simulate_with_feedback(tf, u, 0.01, [](double x, double) { return 0.25 * x * x * x; });
+  EXPECT_NEAR(z(7999), zs, 1e-6);
+  EXPECT_LT(zs, 2.0);
+}
+
+TEST(Blocks, ZeroPhaseSmootherKeepsAConstantAndKillsAFastSine) {
+  Eigen::VectorXd x(5000);
+  for (Eigen::Index k = 0; k < x.size(); ++k) x(k) = 3.0 + std::sin(2.0 * 3.14159 * 5.0 * 0.01 * static_cast<double>(k));
+  const Eigen::VectorXd s = smooth_zero_phase(x, 5.0, 0.01);
+  EXPECT_NEAR(s(2500), 3.0, 0.01);
+}
+
+}  // namespace
+}  // namespace rig::diagnose

@@ -1,0 +1,86 @@
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+
+#include "rig/diagnose/augmented_model.hpp"
+#include "rig/diagnose/concealed.hpp"
+
+namespace rig::diagnose {
+namespace {
+
+std::complex<double> ratio(Effect e, std::vector<double> p, double f_hz) {
+  const ident::TransferFunction g = nominal_genset_model();
+  const AppliedEffect a{e, std::move(p)};
+  return augmented_tf(g, std::span<const AppliedEffect>(&a, 1)).response(f_hz) / g.response(f_hz);
+}
+
+TEST(Effects, EveryWordRoundTripsAndHasParameters) {
+  DataScales s;
+  for (Effect e : kAllEffects) {
+    EXPECT_EQ(effect_from_string(to_string(e)), e);
+    const auto specs = parameter_specs(e, s);
+    ASSERT_FALSE(specs.empty()) << to_string(e);
+    for (const auto& p : specs) EXPECT_LT(p.lo, p.hi) << to_string(e) << " " << p.name;
+  }
+  EXPECT_FALSE(effect_from_string("bogus"));
+}
+
+TEST(Effects, DeadTimeAddsPhaseProportionalToFrequency) {
+  // e^{-j 2 pi f tau}: -36 degrees at 1 Hz for 100 ms.
+  EXPECT_NEAR(std::arg(ratio(Effect::kDeadTime, {0.1}, 1.0)) * 180 / std::numbers::pi, -36.0, 1e-6);
+  EXPECT_NEAR(std::abs(ratio(Effect::kDeadTime, {0.1}, 1.0)), 1.0, 1e-9);
+}
+
+TEST(Effects, LagIsThreeDecibelsDownAtItsCorner) {
+  const double t = 0.08, fc = 1.0 / (2 * std::numbers::pi * t);
+  EXPECT_NEAR(std::abs(ratio(Effect::kExtraLag, {t}, fc)), 1.0 / std::sqrt(2.0), 1e-9);
+  EXPECT_NEAR(std::arg(ratio(Effect::kSensorLag, {t}, fc)), -std::numbers::pi / 4, 1e-9);
+}
+
+TEST(Effects, ResonancePeaksByItsRatioAndIsFlatAway) {
+  EXPECT_NEAR(std::abs(ratio(Effect::kResonance, {3.0, 0.05, 2.5}, 3.0)), 2.5, 1e-9);
+  EXPECT_NEAR(std::abs(ratio(Effect::kResonance, {3.0, 0.05, 2.5}, 0.05)), 1.0, 1e-3);
+}
+
+TEST(Effects, AcCouplingIsAHighPass) {
+  const double rc = 2.0, fc = 1.0 / (2 * std::numbers::pi * rc);
+  EXPECT_NEAR(std::abs(ratio(Effect::kAcCoupling, {rc}, fc)), 1.0 / std::sqrt(2.0), 1e-9);
+  EXPECT_NEAR(std::abs(ratio(Effect::kAcCoupling, {rc}, 5.0)), 1.0, 1e-3);
+}
+
+TEST(Effects, LoadDampingChangesOnlyTheModesDamping) {
+  const ident::TransferFunction g = nominal_genset_model();
+  const AppliedEffect a{Effect::kLoadDamping, {0.25}};
+  const auto t = augmented_tf(g, std::span<const AppliedEffect>(&a, 1));
+  const auto mode = dominant_mode(t);
+  ASSERT_TRUE(mode);
+  EXPECT_NEAR(mode->first, 2.0, 1e-6);
+  EXPECT_NEAR(mode->second, 0.25, 1e-9);
+  EXPECT_NEAR(t.dc_gain(), g.dc_gain(), 1e-9 * g.dc_gain());
+}
+
+TEST(Effects, GainChangeScales) {
+  EXPECT_NEAR(std::abs(ratio(Effect::kGainChange, {0.8}, 1.3)), 0.8, 1e-12);
+}
+
+TEST(Effects, ModelOutputFitsOffsetAndPeriodicDisturbance) {
+  Problem pr;
+  pr.tf = nominal_genset_model();
+  pr.dt_s = 0.01;
+  const Eigen::Index n = 4000;
+  pr.u = Eigen::VectorXd::Zero(n);
+  const Eigen::ArrayXd t = Eigen::ArrayXd::LinSpaced(n, 0.0, static_cast<double>(n - 1)) * 0.01;
+  pr.y = (2.0 + 0.7 * (2 * std::numbers::pi * 1.3 * t).cos()).matrix();
+  pr.u(10) = 1.0;  // not constant
+  pr.est_weight = pr.val_weight = Eigen::ArrayXd::Ones(n);
+  finish_problem(pr);
+  pr.y += pr.baseline_z;
+  const AppliedEffect p{Effect::kPeriodicDisturbance, {1.3}};
+  const ModelOutput out = model_output(pr, std::span<const AppliedEffect>(&p, 1));
+  EXPECT_LT((out.yhat - pr.y).cwiseAbs().maxCoeff(), 1e-6);
+  EXPECT_NEAR(out.derived.front().second, 0.7, 1e-6);
+}
+
+}  // namespace
+}  // namespace rig::diagnose

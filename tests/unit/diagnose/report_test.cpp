@@ -1,0 +1,48 @@
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+
+#include "rig/diagnose/concealed.hpp"
+#include "rig/diagnose/report_out.hpp"
+#include "rig/io/model_file.hpp"
+
+namespace rig::diagnose {
+namespace {
+
+TEST(Report, JsonHasTheDocumentedKeysAndTheModelRoundTrips) {
+  ConcealedSpec spec;
+  spec.effect = Effect::kDeadTime;
+  spec.seed = 41;
+  spec.duration_s = 120.0;
+  const ConcealedRecording rec = make_concealed(spec);
+  const DiagnoseResult r = diagnose(rec.input);
+  const nlohmann::json j = report_json(r, {"rec.csv", "model.json", "u", "y"});
+  for (const char* key : {"verdict", "hypotheses", "location", "explanation"}) EXPECT_TRUE(j.contains(key)) << key;
+  for (const char* key : {"band_hz", "time_windows", "amplitude_dependent"}) EXPECT_TRUE(j["location"].contains(key)) << key;
+  ASSERT_FALSE(j["hypotheses"].empty());
+  for (const char* key : {"effect", "params", "fit_before", "fit_after", "validation_fit_before",
+                          "validation_fit_after", "score"})
+    EXPECT_TRUE(j["hypotheses"][0].contains(key)) << key;
+  EXPECT_EQ(j["verdict"], "dead_time");
+
+  io::ModelFile base;
+  base.tf = rec.input.model;
+  const io::ModelFile aug = augmented_model(r, base);
+  const auto dir = std::filesystem::temp_directory_path() / "rig_diagnose_report_test";
+  std::filesystem::create_directories(dir);
+  io::write_model(dir / "augmented.json", aug);
+  const io::ModelFile back = io::read_model(dir / "augmented.json");
+  EXPECT_NEAR(back.tf.delay_s, 0.10, 0.02);  // 60 ms nominal + 40 ms found
+  EXPECT_EQ(back.extra["augmentation"][0]["effect"], "dead_time");
+
+  write_report_html(r, {"rec.csv", "model.json", "u", "y"}, dir / "report.html");
+  std::ifstream in(dir / "report.html");
+  const std::string html((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  EXPECT_NE(html.find("dead_time"), std::string::npos);
+  EXPECT_NE(html.find("Residual spectrum"), std::string::npos);
+  std::filesystem::remove_all(dir);
+}
+
+}  // namespace
+}  // namespace rig::diagnose
