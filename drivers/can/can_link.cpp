@@ -42,6 +42,9 @@ class CanLink final : public LinkBase {
   std::uint8_t tx_counter_ = 0;
   Sample sample_;
   std::optional<std::uint16_t> target_;  // counter awaited by this read (lockstep)
+  // Lockstep, first read: the counter is not known yet, so the first 0xFF51 that arrives opens
+  // the burst of `burst_ticks_` new ticks and the awaited one is the burst's last.
+  std::uint32_t burst_ticks_ = 0;
   std::uint64_t unwrapped_ = 0;          // sample counter without 16-bit wrap
   std::optional<std::uint16_t> last_seen_;
 };
@@ -105,6 +108,10 @@ LinkResult<void> CanLink::apply(const can_frame& f, bool& fresh, bool& saw_old) 
       unwrapped_ = last_seen_ ? unwrapped_ + static_cast<std::uint16_t>(m->counter - *last_seen_)
                               : m->counter;
       last_seen_ = m->counter;
+      if (!target_ && burst_ticks_ > 0) {
+        target_ = static_cast<std::uint16_t>(m->counter + burst_ticks_ - 1);
+        burst_ticks_ = 0;
+      }
       sample_.power_kw = m->power_w / 1000.0;
       sample_.status = m->status;
       sample_.counter = m->counter;
@@ -132,8 +139,13 @@ LinkResult<Sample> CanLink::read() {
   const std::string where = "PGN 0xFF51 on " + uri_.text;
   const auto deadline = Clock::now() + options_.response_timeout;
   target_.reset();
-  if (counter_.pending_ticks() != 0 && counter_.last()) {
-    target_ = static_cast<std::uint16_t>(*counter_.last() + counter_.pending_ticks());
+  burst_ticks_ = 0;
+  if (counter_.pending_ticks() != 0) {
+    if (counter_.last()) {
+      target_ = static_cast<std::uint16_t>(*counter_.last() + counter_.pending_ticks());
+    } else {
+      burst_ticks_ = counter_.pending_ticks();
+    }
   }
   bool fresh = false;
   bool saw_old = false;

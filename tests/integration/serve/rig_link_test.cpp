@@ -25,10 +25,8 @@ std::vector<double> run_link(const std::string& uri, int cycles) {
     return r.has_value();
   };
   if (!check(link.configure(), "configure") || !check(link.activate(), "activate")) return {};
-  // One tick first: over CAN the link learns the plant's counter from the first 0xFF51 it
-  // reads, and after advance(1) that frame is the only one (after advance(10) it would be
-  // the first of ten).
-  if (!check(link.advance(1), "advance") || !link.read()) return {};
+  // The very first exchange already advances 10 ticks: over CAN the link must then await the
+  // last frame of that burst although it has not seen the plant's counter before.
   std::optional<std::uint16_t> last_counter;
   for (int k = 0; k < cycles; ++k) {
     const double bias_pct = k < cycles / 3 ? 0.0 : 1.0;
