@@ -116,6 +116,8 @@ DiagnoseResult diagnose(const DiagnoseInput& in, const DiagnoseOptions& o) {
     std::vector<Candidate> cands;
     for (Effect e : applicable(pr, r.location, o)) cands.push_back(single(e, pr, r.location));
     r.hypotheses = fit_all(pr, cands, base.yhat, o);
+    rank(r.hypotheses);
+    refine_onsets(pr, r.hypotheses, base.yhat, o.fit);
     add_sensor_lag_twin(pr, r.hypotheses, o.fit);
     rank(r.hypotheses);
     if (o.try_pairs && !r.hypotheses.empty() && !explains(pr, r.hypotheses.front(), r.location)) {

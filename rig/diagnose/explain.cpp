@@ -28,10 +28,12 @@ std::string where_in_frequency(const Location& loc) {
 std::string where_in_time_and_level(const DiagnoseResult& r) {
   std::string s;
   const auto& pr = r.problem;
-  if (pr.active_from > 0 || pr.active_to < pr.u.size())
-    s += fmt::format("The residual leaves its noise bounds only from {:.0f} s to {:.0f} s. ",
-                     static_cast<double>(pr.active_from) * pr.dt_s,
-                     static_cast<double>(pr.active_to) * pr.dt_s);
+  const HypothesisFit* h = r.chosen();
+  const Eigen::Index from = h ? h->active_from : pr.active_from;
+  const Eigen::Index to = h && h->active_to >= 0 ? h->active_to : pr.active_to;
+  if (from > 0 || to < pr.u.size())
+    s += fmt::format("The mismatch is present only from {:.0f} s to {:.0f} s of the record. ",
+                     static_cast<double>(from) * pr.dt_s, static_cast<double>(to) * pr.dt_s);
   const auto& a = r.location.amp;
   if (a.amplitude_dependent && a.by_level.size() >= 2)
     s += fmt::format("The gain the recording shows relative to the model is {:.2f} for the smallest "

@@ -130,6 +130,8 @@ HypothesisFit fit_hypothesis(const Problem& pr, const std::vector<std::vector<Ap
   h.tf = mo.tf;
   h.derived = std::move(mo.derived);
   h.evaluations = calls;
+  h.active_from = pr.active_from;
+  h.active_to = pr.active_to;
   h.fit_before = weighted_fit_pct(pr.y, baseline_yhat, pr.est_weight);
   h.fit_after = weighted_fit_pct(pr.y, h.yhat, pr.est_weight);
   h.validation_fit_before = weighted_fit_pct(pr.y, baseline_yhat, pr.val_weight);

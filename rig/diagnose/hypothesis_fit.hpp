@@ -29,6 +29,7 @@ struct HypothesisFit {
   int evaluations = 0;
   Eigen::VectorXd yhat;  // the augmented model's output over the whole record
   ident::TransferFunction tf;
+  Eigen::Index active_from = 0, active_to = -1;  // span the effect acts on (-1: to the end)
 
   std::string name() const;  // "dead_time" or "dead_time+drift"
   int parameter_count() const;

@@ -32,6 +32,8 @@ json hypothesis_json(const HypothesisFit& h, const Problem& pr) {
           {"validation_fit_before", number_or_null(h.validation_fit_before)},
           {"validation_fit_after", number_or_null(h.validation_fit_after)},
           {"score", number_or_null(h.score)},
+          {"active_span_s", {static_cast<double>(h.active_from) * pr.dt_s,
+                             static_cast<double>(h.active_to < 0 ? pr.u.size() : h.active_to) * pr.dt_s}},
           {"parameters", h.parameter_count()},
           {"evaluations", h.evaluations}};
 }
@@ -40,7 +42,15 @@ json location_json(const DiagnoseResult& r) {
   const Location& loc = r.location;
   json windows = json::array();
   for (const auto& w : loc.windows)
-    windows.push_back({{"from_s", w.from_s}, {"to_s", w.to_s}, {"rms_ratio", w.rms_ratio}});
+    windows.push_back({{"from_s", w.from_s}, {"to_s", w.to_s}, {"rms_ratio", w.rms_ratio},
+                       {"found_by", "residual level"}});
+  const HypothesisFit* h = r.chosen();
+  const Eigen::Index n = r.problem.u.size();
+  if (windows.empty() && h && (h->active_from > 0 || (h->active_to >= 0 && h->active_to < n)))
+    windows.push_back({{"from_s", static_cast<double>(h->active_from) * r.problem.dt_s},
+                       {"to_s", static_cast<double>(h->active_to < 0 ? n : h->active_to) * r.problem.dt_s},
+                       {"rms_ratio", nullptr},
+                       {"found_by", "change point of the fitted effect's gain"}});
   json levels = json::array();
   for (const auto& b : loc.amp.by_level)
     levels.push_back({{"level", b.level}, {"gain", b.gain}, {"gain_std", b.gain_std}});

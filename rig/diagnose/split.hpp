@@ -17,6 +17,14 @@ Problem prepare_problem(const DiagnoseInput& input, int* blocks, Eigen::Index* w
 // contiguous), input-side effects are fitted on that span only.
 void gate_to_windows(Problem& problem, const Location& location);
 
+// An effect present in part of the record only, too weak to locate from the residual alone:
+// the fitted hypothesis' own gain per window (baseline minus augmented squared error) is
+// tested for a change point (two-sample t over 40 windows, |t| > 4, the quiet side gaining
+// under a quarter of the active side); if found, the hypothesis is refitted on that span
+// and kept when its validation score rises. Top three input-side hypotheses only.
+void refine_onsets(const Problem& problem, std::vector<HypothesisFit>& hypotheses,
+                   const Eigen::VectorXd& baseline_yhat, const FitOptions& fit);
+
 // extra_lag and sensor_lag act alike on the input; a sensor lag also filters the noise.
 // The residual after the lag is fitted tells them apart: its PSD above 2 fc over its PSD
 // below fc/2 (fc = 1/(2 pi T)) is about 1 for noise that bypassed the lag and about
