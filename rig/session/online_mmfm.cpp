@@ -1,5 +1,6 @@
 #include "rig/session/online_mmfm.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
@@ -24,18 +25,23 @@ signal::StreamingOptions streaming(const OnlineMmfmOptions& o, bool per_block) {
   return s;
 }
 
-// Sample mean and standard deviation of each component over the blocks.
+// Robust spread of each component over the blocks: 1.4826 * median |x - median(x)| (equal
+// to the standard deviation for Gaussian scatter), so that one block spoilt by a transient
+// does not dominate the standard errors.
 template <class V>
-std::pair<V, V> mean_std(const std::vector<V>& xs) {
-  V mean = xs.front();
-  mean.setZero();
-  for (const auto& x : xs) mean += x;
-  mean /= static_cast<double>(xs.size());
-  V var = mean;
-  var.setZero();
-  for (const auto& x : xs) var += (x - mean).cwiseAbs2();
-  var /= static_cast<double>(xs.size() - 1);
-  return {mean, var.cwiseSqrt()};
+V robust_std(const std::vector<V>& xs) {
+  V out = xs.front();
+  std::vector<double> col(xs.size());
+  for (Eigen::Index j = 0; j < out.size(); ++j) {
+    for (std::size_t b = 0; b < xs.size(); ++b) col[b] = xs[b](j);
+    const auto mid = col.begin() + static_cast<std::ptrdiff_t>(col.size() / 2);
+    std::nth_element(col.begin(), mid, col.end());
+    const double median = *mid;
+    for (double& c : col) c = std::abs(c - median);
+    std::nth_element(col.begin(), mid, col.end());
+    out(j) = 1.4826 * *mid;
+  }
+  return out;
 }
 
 }  // namespace
@@ -125,12 +131,12 @@ void OnlineMmfm::apply_spread(std::vector<ident::ParameterEstimate>& params,
   if (blocks < kMinSpreadBlocks) return;
   const double b_eff = options_.exponential ? std::min(blocks, 2.0 * options_.weight - 1.0)
                                             : blocks;
-  const auto [theta_mean, theta_std] = mean_std(block_thetas_);
+  const auto theta_std = robust_std(block_thetas_);
   for (Eigen::Index j = 1; j < theta_std.size() && j + 1 < static_cast<Eigen::Index>(params.size());
        ++j) {
     params[static_cast<std::size_t>(j)].std_error = theta_std(j) / std::sqrt(b_eff);
   }
-  const auto [d_mean, d_std] = mean_std(block_derived_);
+  const auto d_std = robust_std(block_derived_);
   derived.gain_std = d_std(0) / std::sqrt(b_eff);
   derived.fn_hz_std = d_std(1) / std::sqrt(b_eff);
   derived.zeta_std = d_std(2) / std::sqrt(b_eff);

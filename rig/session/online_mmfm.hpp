@@ -4,7 +4,7 @@
 // errors, and the stopping rule is checked.
 //
 // Standard errors come from the spread of independent per-block estimates (batch means):
-//     se_j = std_b(theta_b,j) / sqrt(B_eff),
+//     se_j = s_b(theta_b,j) / sqrt(B_eff),  s_b = 1.4826 median|theta_b - median(theta_b)|,
 // B_eff = number of blocks for cumulative averaging, min(B, 2W - 1) for exponential
 // averaging of weight W (the variance of an exponential average of independent blocks is
 // 1/(2W - 1) of one block's). Until three blocks exist the estimator's analytic value is

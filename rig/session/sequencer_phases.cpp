@@ -248,7 +248,10 @@ bool Sequencer::sweep() {
   p.min_integrate_cycles = static_cast<int>(std::ceil(c.sweep.integrate_cycles));
   p.min_integrate_s = c.sweep.min_integrate_s;
   p.amplitude.band_kw = c.safety.band_pct / 100.0 * p0_kw_;
-  p.amplitude.plan_fraction = c.safety.plan_fraction;
+  // Below the supervisor's back-off threshold (start_fraction of the band): a back-off inside
+  // a point changes the amplitude mid-integration and biases that point.
+  p.amplitude.plan_fraction =
+      std::min(c.safety.plan_fraction, 0.9 * supervisor_config().backoff.start_fraction);
   p.amplitude.noise_peak_kw = 3.0 * data_.steady->noise_pct / 100.0 * p0_kw_;
   p.amplitude.max_amplitude_pct = std::min(c.safety.clamp_pct, step_safe_amplitude_pct(prior, d));
   fra::SweepPlan plan;

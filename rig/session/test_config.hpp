@@ -73,9 +73,9 @@ struct MmfmSettings {
   std::string correlator = "direct";     // direct | fft | relay | polarity
   std::string averaging = "cumulative";  // cumulative | exponential (weight averaging_w)
   int averaging_w = 8;              // exponential averaging weight (blocks)
-  double target_rel_std_error = 0.05;  // stop when every parameter's rel. std error is below
-  double min_duration_s = 60.0;     // never stop before this much excitation
-  double max_duration_s = 300.0;    // stop regardless
+  double target_rel_std_error = 0.03;  // stop when every parameter's rel. std error is below
+  double min_duration_s = 120.0;    // never stop before this much excitation
+  double max_duration_s = 600.0;    // stop regardless
 };
 
 struct SweepSettings {

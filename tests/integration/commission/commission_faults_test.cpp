@@ -1,0 +1,165 @@
+// Faults during a commissioning test: the exit code says what happened, the bias is back at
+// baseline, and the recording stays readable. Malformed test files are refused before
+// anything is written.
+#include <gtest/gtest.h>
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <fmt/format.h>
+
+#include <chrono>
+#include <fstream>
+#include <regex>
+#include <thread>
+
+#include "rig/io/recording.hpp"
+#include "tests/integration/commission/run_rig.hpp"
+
+namespace rig::testing {
+namespace {
+
+using namespace std::chrono_literals;
+
+// A process started through the shell with its pid captured, output to `log`.
+struct Background {
+  pid_t pid = -1;
+  std::filesystem::path log;
+  static Background start(const std::string& cmd, const std::filesystem::path& log) {
+    const auto pid_file = log.string() + ".pid";
+    const std::string line = fmt::format("( {} ) > {} 2>&1 & echo $! > {}", cmd, log.string(), pid_file);
+    EXPECT_EQ(std::system(line.c_str()), 0);
+    Background b;
+    b.log = log;
+    b.pid = std::stoi(read_text(pid_file));
+    return b;
+  }
+  // Waits until the process is gone (it is the shell's child, reaped by init).
+  bool wait_gone(std::chrono::seconds limit) const {
+    for (auto t = 0ms; t < limit; t += 100ms) {
+      if (kill(pid, 0) != 0) return true;
+      std::this_thread::sleep_for(100ms);
+    }
+    return false;
+  }
+};
+
+// plantsim on the monotonic clock, Modbus TCP on an ephemeral port; returns the rig's URI.
+std::string start_realtime_plant(const std::filesystem::path& dir, Background& plant) {
+  plant = Background::start((bin_dir() / "plantsim").string() +
+                                " --preset stornoway --seed 3 --clock realtime "
+                                "--modbus tcp://127.0.0.1:0",
+                            dir / "plantsim.log");
+  const std::regex ready("modbus tcp://127\\.0\\.0\\.1:([0-9]+) ready");
+  for (int i = 0; i < 100; ++i) {
+    std::smatch m;
+    const std::string text = read_text(dir / "plantsim.log");
+    if (std::regex_search(text, m, ready)) return "modbus+tcp://127.0.0.1:" + m[1].str() + "?unit=1";
+    std::this_thread::sleep_for(100ms);
+  }
+  ADD_FAILURE() << "plantsim did not start: " << read_text(dir / "plantsim.log");
+  return {};
+}
+
+std::filesystem::path write_file(const std::filesystem::path& path, const std::string& text) {
+  std::ofstream(path) << text;
+  return path;
+}
+
+constexpr const char* kRealtimeProfile = R"([steady_state]
+duration_s = 3.0
+[pilot]
+duration_s = 20.0
+)";
+
+TEST(CommissionFaults, GridVoltageDipTripsWithExit4AndBiasAtBaseline) {
+  const auto out = fresh_dir("dip");
+  const int code = run_rig("commission --emulate --seed 1 --quiet --fault grid.v_pu=0.85@t=80 --out " +
+                               out.string(),
+                           out / "rig.log");
+  EXPECT_EQ(code, 4) << read_text(out / "rig.log");
+  const auto report = read_json(out / "report.json");
+  EXPECT_EQ(report["safety"]["trip"]["cause"], "out_of_band");
+  const auto rec = io::read_recording(out / "recording.csv");
+  ASSERT_GT(rec.rows(), 1000);
+  const auto& u = rec.column("u");
+  const auto& echo = rec.column("bias_echo");
+  EXPECT_DOUBLE_EQ(u(rec.rows() - 1), 0.0) << "bias not back at baseline";
+  EXPECT_DOUBLE_EQ(echo(rec.rows() - 1), 0.0) << "governor still applies a bias";
+}
+
+TEST(CommissionFaults, MalformedTestFilesExit2BeforeAnythingIsWritten) {
+  const auto dir = fresh_dir("malformed");
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {"[excitation]\nbandwith_hz = 4\n", "excitation.bandwith_hz"},
+      {"[mmfm]\nlags = \"many\"\n", "mmfm.lags"},
+      {"[safety]\nband_pct = 4.0\n", "safety.band_pct"},
+      {"[sweep]\nto_hz = 80.0\n", "sweep.to_hz"},
+      {"[link\n", "line 1"}};
+  int i = 0;
+  for (const auto& [text, key] : cases) {
+    const auto out = dir / std::to_string(i);
+    const auto test = write_file(dir / fmt::format("t{}.toml", i++), text);
+    const int code = run_rig(fmt::format("commission --emulate --test {} --out {}", test.string(),
+                                         out.string()),
+                             dir / "rig.log");
+    const std::string log = read_text(dir / "rig.log");
+    EXPECT_EQ(code, 2) << log;
+    EXPECT_NE(log.find(key), std::string::npos) << log;
+    EXPECT_FALSE(std::filesystem::exists(out / "recording.csv")) << "started despite " << key;
+  }
+}
+
+TEST(CommissionFaults, LinkDropMidTestExit3AndRecordingReadable) {
+  const auto dir = fresh_dir("drop");
+  Background plant;
+  const std::string uri = start_realtime_plant(dir, plant);
+  ASSERT_FALSE(uri.empty());
+  const auto test = write_file(dir / "rt.toml", kRealtimeProfile);
+  const Background rig = Background::start(
+      fmt::format("{}; echo $? > {}", (bin_dir() / "rig").string() + " commission --quiet --link " +
+                                          uri + " --test " + test.string() + " --out " +
+                                          (dir / "out").string(),
+                  (dir / "code").string()),
+      dir / "rig.log");
+  std::this_thread::sleep_for(8s);  // steady state (3 s) done, pilot under way
+  kill(plant.pid, SIGKILL);
+  rig.wait_gone(30s);
+  std::this_thread::sleep_for(500ms);
+  EXPECT_EQ(read_text(dir / "code"), "3\n") << read_text(dir / "rig.log");
+  const auto rec = io::read_recording(dir / "out/recording.csv");
+  EXPECT_GT(rec.rows(), 500);
+}
+
+TEST(CommissionFaults, OperatorAbortRampsDownAndKill9KeepsTheRecording) {
+  const auto dir = fresh_dir("abort");
+  Background plant;
+  const std::string uri = start_realtime_plant(dir, plant);
+  ASSERT_FALSE(uri.empty());
+  const auto test = write_file(dir / "rt.toml", kRealtimeProfile);
+  const std::string rig_cmd = (bin_dir() / "rig").string() + " commission --quiet --link " + uri +
+                              " --test " + test.string() + " --out ";
+  // SIGINT: clean ramp-down, exit 4 (safety abort), bias back at baseline.
+  const Background a = Background::start(
+      fmt::format("exec {}", rig_cmd + (dir / "a").string()), dir / "a.log");
+  std::this_thread::sleep_for(7s);
+  kill(a.pid, SIGINT);
+  a.wait_gone(30s);
+  const auto report = read_json(dir / "a/report.json");
+  EXPECT_EQ(report["exit_code"], 4) << read_text(dir / "a.log");
+  EXPECT_EQ(report["safety"]["trip"]["cause"], "external");
+  const auto rec = io::read_recording(dir / "a/recording.csv");
+  EXPECT_DOUBLE_EQ(rec.column("u")(rec.rows() - 1), 0.0);
+  // kill -9: the recording holds every row up to the last flush and reads back.
+  const Background b = Background::start(
+      fmt::format("exec {}", rig_cmd + (dir / "b").string()), dir / "b.log");
+  std::this_thread::sleep_for(6s);
+  kill(b.pid, SIGKILL);
+  b.wait_gone(10s);
+  const auto cut = io::read_recording(dir / "b/recording.csv");
+  EXPECT_GT(cut.rows(), 300);  // >= 5 s at 100 Hz, flushed at least every 0.5 s
+  kill(plant.pid, SIGTERM);
+}
+
+}  // namespace
+}  // namespace rig::testing
