@@ -192,8 +192,9 @@ Recording parse_table(std::string_view text, const std::string& source,
   }
   const detail::Line& first = split.lines.front();
   const char sep = detail::detect_separator(first.text);
-  const bool strip = sep != 0 && first.text.find_last_not_of(" \t\r") != std::string_view::npos &&
-                     first.text[first.text.find_last_not_of(" \t\r")] == sep;
+  // MATLAB ends every row with a separator when the header line ends with one.
+  const auto last = first.text.find_last_not_of(sep == '\t' ? " \r" : " \t\r");
+  const bool strip = sep != 0 && last != std::string_view::npos && first.text[last] == sep;
   const auto first_fields = detail::split_fields(first.text, sep, strip);
   rec.has_header = looks_like_header(first_fields);
   const auto names = header_names(first_fields, rec.has_header, source, first.number);
@@ -208,6 +209,9 @@ Recording parse_table(std::string_view text, const std::string& source,
                                                 options.min_rows, rows));
   }
   keep_columns(cols, names, options, source, rec);
+  if (rec.names.empty()) {
+    throw InputError(source, 0, "", "expected at least one data column besides the time column");
+  }
   return rec;
 }
 

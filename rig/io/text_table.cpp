@@ -75,7 +75,8 @@ std::vector<std::string_view> split_fields(std::string_view line, char separator
     return fields;
   }
   std::string_view body = line;
-  const auto last = body.find_last_not_of(" \t\r");
+  // Trailing blanks go, but not a trailing tab when the tab is the separator (an empty cell).
+  const auto last = body.find_last_not_of(separator == '\t' ? " \r" : " \t\r");
   if (last != std::string_view::npos) body = body.substr(0, last + 1);
   if (strip_trailing && !body.empty() && body.back() == separator) body.remove_suffix(1);
   std::size_t pos = 0;

@@ -85,6 +85,20 @@ TEST(RecordingReader, UnterminatedLastLineIsDroppedWithWarning) {
   EXPECT_NE(rec.warnings[0].find("rec.csv:5"), std::string::npos) << rec.warnings[0];
 }
 
+TEST(RecordingReader, TabSeparatedWithTrailingTabOnEveryRow) {
+  ReadOptions options;
+  options.dt_s = 1.0;
+  const Recording rec = parse_recording("a\tb\t\n1\t2\t\n3\t4\t\n", "tab.csv", options);
+  ASSERT_EQ(rec.names, (std::vector<std::string>{"a", "b"}));
+  EXPECT_DOUBLE_EQ(rec.column("b")[1], 4.0);
+}
+
+TEST(RecordingReader, OnlyATimeColumnIsAnError) {
+  ReadOptions options;
+  options.min_rows = 1;
+  EXPECT_THROW(parse_recording("t\n0\n1\n", "t.csv", options), InputError);
+}
+
 TEST(RecordingReader, CrLfLineEndsAndSemicolonSeparator) {
   const Recording rec = parse_recording("t;u;y\r\n0;1;2\r\n1;3;4\r\n", "rec.csv");
   EXPECT_EQ(rec.rows(), 2);

@@ -1,0 +1,76 @@
+// libFuzzer target for the recording reader (and the sidecar/model JSON validators, which
+// read untrusted files too). Any input must either parse into a consistent Recording or
+// raise InputError with a one-line message; anything else (a crash, a sanitizer report, an
+// abort below) is a bug.
+#include <cmath>
+#include <cstdint>
+#include <cstdlib>
+#include <string_view>
+
+#include <nlohmann/json.hpp>
+
+#include "rig/io/model_file.hpp"
+#include "rig/io/recording.hpp"
+#include "rig/io/sidecar.hpp"
+
+namespace {
+
+void require(bool ok) {
+  if (!ok) std::abort();
+}
+
+void check_consistent(const rig::io::Recording& rec, const rig::io::ReadOptions& options) {
+  require(rec.names.size() == rec.columns.size());
+  require(rec.rows() >= options.min_rows);
+  for (const auto& c : rec.columns) {
+    require(c.size() == rec.rows());
+    require(c.allFinite());
+  }
+  if (rec.time_s) {
+    require(rec.time_s->size() == rec.rows());
+    for (Eigen::Index i = 1; i < rec.time_s->size(); ++i) require((*rec.time_s)[i] > (*rec.time_s)[i - 1]);
+  }
+  if (options.require_time_base) require(rec.dt_s > 0.0 && std::isfinite(rec.dt_s));
+  require(rec.sampling.jitter_max_s >= 0.0 && rec.sampling.jitter_rms_s >= 0.0);
+}
+
+void parse_with(std::string_view text, const rig::io::ReadOptions& options) {
+  try {
+    check_consistent(rig::io::parse_recording(text, "fuzz.csv", options), options);
+  } catch (const rig::io::InputError& e) {
+    require(std::string_view(e.what()).find('\n') == std::string_view::npos);
+  }
+}
+
+void parse_json_documents(std::string_view text) {
+  const nlohmann::json doc = nlohmann::json::parse(text.begin(), text.end(), nullptr, false);
+  if (doc.is_discarded()) return;
+  try {
+    rig::io::parse_sidecar(doc, "fuzz.json");
+  } catch (const rig::io::InputError&) {
+  }
+  try {
+    const rig::io::ModelFile m = rig::io::model_from_json(doc, "fuzz.json");
+    require(m.tf.den.size() > 0 && m.tf.den[0] != 0.0 && m.tf.delay_s >= 0.0);
+    rig::io::model_to_json(m);  // a model that was accepted must be writable
+  } catch (const rig::io::InputError&) {
+  }
+}
+
+}  // namespace
+
+extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
+  const std::string_view text(reinterpret_cast<const char*>(data), size);
+  rig::io::ReadOptions plain;
+  parse_with(text, plain);
+  rig::io::ReadOptions selected;
+  selected.columns = {"u", "2"};
+  selected.dt_s = 0.01;
+  parse_with(text, selected);
+  rig::io::ReadOptions table;
+  table.require_time_base = false;
+  table.min_rows = 1;
+  parse_with(text, table);
+  parse_json_documents(text);
+  return 0;
+}
