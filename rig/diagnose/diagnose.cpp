@@ -63,8 +63,11 @@ std::vector<Candidate> pair_candidates(const std::vector<HypothesisFit>& singles
   if (inputs.size() > 3) inputs.resize(3);
   std::vector<Candidate> out;
   for (std::size_t i = 0; i < inputs.size(); ++i) {
-    for (std::size_t j = i + 1; j < inputs.size(); ++j)
+    for (std::size_t j = i + 1; j < inputs.size(); ++j) {
+      const auto lag = [](Effect e) { return e == Effect::kExtraLag || e == Effect::kSensorLag; };
+      if (lag(inputs[i]->effects[0].effect) && lag(inputs[j]->effects[0].effect)) continue;  // twins
       out.push_back({{inputs[i]->effects[0], inputs[j]->effects[0]}});
+    }
     for (std::size_t j = 0; j < dists.size() && i < 2; ++j)
       out.push_back({{inputs[i]->effects[0], dists[j]->effects[0]}});
   }

@@ -79,8 +79,9 @@ std::vector<ParamSpec> parameter_specs(Effect effect, const DataScales& s) {
     case Effect::kPeriodicDisturbance:
       return {{"freq_hz", std::max(2.0 / s.duration_s, 1e-3), 0.499 / s.dt_s, true}};
     case Effect::kDrift:
-      return {{"time_constant_s", 20.0 * s.dt_s, std::max(40.0 * s.dt_s, s.duration_s / 4.0),
-               true}};
+      // Slow by definition: a short smoother would fit the noise in-sample.
+      return {{"time_constant_s", std::max({20.0 * s.dt_s, 5.0, s.duration_s / 200.0}),
+               std::max({40.0 * s.dt_s, 10.0, s.duration_s / 4.0}), true}};
   }
   return {};
 }
