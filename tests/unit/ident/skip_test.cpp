@@ -1,15 +1,17 @@
 // A small seeded version of thesis Table 5-1 (the full table is bench_ident_skip): relay
 // correlation with Fell's skip on the 2 Hz, zeta 0.1 plant at SNR 10 dB, fs 200 Hz, 20 blocks
 // of 1600 products, MMFM. Seeds 700..739; every skip correlates the same records.
-// Thresholds from the Monte Carlo (bench_ident_skip --runs 400 --seed 1, split into ten
-// batches of 40 runs, the size used here):
-//   skip 8 means: |fn bias| <= 0.09 %, |zeta bias| <= 1.6 %, |gain bias| <= 0.44 % over the
-//   batches (population: 0.00 %, 0.28 %, -0.01 %), so 1 %, 10 % and 5 % are wide margins.
-//   std(skip 8) / std(skip 1): population fn 1.37, zeta 1.13, gain 1.46; batch maxima 1.77,
-//   1.25, 1.73, hence "< 2".
+// Thresholds from the Monte Carlo (bench_ident_skip --runs 400 --seed 1 and --runs 1200
+// --seed 401: 1600 runs, split into 40 batches of 40 runs, the size used here):
+//   skip 8 means: |fn bias| <= 0.10 %, |zeta bias| <= 1.6 %, |gain bias| <= 0.7 % in every
+//   batch (all 1600: -0.02 %, +0.2 %, 0.0 %), so 1 %, 10 % and 5 % are wide margins.
+//   std(skip 8) / std(skip 1), all runs fn 1.33, zeta 1.13, gain 1.48; batch maxima 1.77,
+//   1.38, 2.06: "< 2" for fn and zeta, "< 2.5" for the gain (noise-free, --snr 100, its
+//   ratio is 1.0: the rise comes from the white output noise, whose products' variance
+//   grows as the skip).
 //   Breakdown below fs/skip = 2 f_max: std(skip 32) / std(skip 16) for fn, batch minimum
-//   2.66 (population 3.2); std(skip 100) / std(skip 8), batch minima fn 14, zeta 6.3, gain
-//   8.2. ">= 2" fails only if the break is gone.
+//   2.32 (all runs 3.3); std(skip 100) / std(skip 8), batch minima fn 10, zeta 6.1, gain
+//   7.4. ">= 2" fails only if the break is gone.
 #include <cmath>
 #include <cstdio>
 #include <map>
@@ -66,7 +68,7 @@ TEST(FellSkip, NoBiasAndLittleSpreadUpToSkip8BreakdownBelowTwiceFmax) {
   // Spread at skip 8 at most about twice that without skip.
   EXPECT_LT(f8.std, 2.0 * f1.std);
   EXPECT_LT(z8.std, 2.0 * z1.std);
-  EXPECT_LT(g8.std, 2.0 * g1.std);
+  EXPECT_LT(g8.std, 2.5 * g1.std);
   // Below 2 f_max the spread jumps: skip 32 against skip 16 and skip 100 against skip 8.
   const Stats f16 = stats_of(t.at(16).fn), f32 = stats_of(t.at(32).fn);
   const Stats f100 = stats_of(t.at(100).fn), z100 = stats_of(t.at(100).zeta);
