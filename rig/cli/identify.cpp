@@ -123,6 +123,29 @@ signal::CorrelatorOptions correlator_options(const IdentifyArgs& a, const io::Re
   return c;
 }
 
+// Sidecar "coupled_columns" name AC-coupled channels; a channel X_ac with its raw source X
+// in the same recording lets the quality check measure each network's time constant.
+std::vector<ident::CoupledPair> coupled_pairs(const IdentifyArgs& a, const io::Recording& rec) {
+  std::vector<ident::CoupledPair> pairs;
+  for (const std::string& name : rec.sidecar.coupled_columns) {
+    const std::string suffix = "_ac";
+    if (name.size() <= suffix.size() || name.compare(name.size() - suffix.size(), suffix.size(), suffix) != 0) {
+      continue;
+    }
+    io::ReadOptions ro;
+    ro.columns = {name.substr(0, name.size() - suffix.size()), name};
+    ro.dt_s = rec.dt_s;
+    ro.min_rows = rec.rows();
+    try {
+      const io::Recording both = io::read_recording(a.recording, ro);
+      pairs.push_back({name, both.columns[0], both.columns[1]});
+    } catch (const io::InputError&) {
+      // No raw source in the recording: the network cannot be measured, nothing to compare.
+    }
+  }
+  return pairs;
+}
+
 ident::QualityOptions quality_options(const io::Recording& rec, const signal::CorrelatorOptions& c,
                                       const std::optional<ident::ModelOrder>& order, bool delay_auto) {
   ident::QualityOptions q;
@@ -159,8 +182,9 @@ int run_identify(const IdentifyArgs& a) {
   const Eigen::VectorXd& y = rec.column(out);
   require_excitation(rec, in, u);
   ctx.correlator = correlator_options(a, rec);
-  const ident::QualityReport quality =
-      ident::check_quality(u, y, rec.dt_s, quality_options(rec, ctx.correlator, order, !delay));
+  ident::QualityOptions qo = quality_options(rec, ctx.correlator, order, !delay);
+  qo.coupled_pairs = coupled_pairs(a, rec);
+  const ident::QualityReport quality = ident::check_quality(u, y, rec.dt_s, qo);
   std::filesystem::create_directories(a.out);
   const std::filesystem::path dir(a.out);
   if (quality.has_fatal()) {

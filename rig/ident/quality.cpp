@@ -149,9 +149,51 @@ void check_coupled_pairs(double dt_s, const QualityOptions& o, QualityReport& re
 
 namespace {
 
+// Undecayed: |r_yu| over the last tenth of the positive lags against its peak.
+void check_decay(const Correlations& c, const VectorXd& rho, double sigma, const QualityOptions& o,
+                 QualityReport& rep) {
+  const Index n = c.ryu.size(), p = n - 1 - c.ryu.zero_index;
+  const Index tail_n = std::max<Index>(3, p / 10);
+  const double pos_peak = rho.tail(p + 1).cwiseAbs().maxCoeff();
+  const double tail = rho.tail(tail_n).cwiseAbs().maxCoeff();
+  rep.figures.emplace_back("tail_ratio", tail / pos_peak);
+  if (tail / pos_peak > o.undecayed_ratio && tail > 3.0 * sigma) {
+    add(rep, "undecayed", Severity::kWarning,
+        fmt::format("The cross-correlation is still at {:.0f} % of its peak at the end of the "
+                    "lag window ({:.3g} s): lengthen the window (--lags), remove drift from the "
+                    "recording, or check that both channels have the same AC coupling.",
+                    100.0 * tail / pos_peak, c.ryu.lag_s(n - 1)),
+        tail / pos_peak, o.undecayed_ratio);
+  }
+}
+
+// Sag: the step response s = cumulative sum of h over lags >= 0, its last quarter's mean
+// against its largest excursion. A type-0 plant settles near its peak; an output that is
+// AC coupled alone returns towards zero (a slow opposite-sign tail in h).
+void check_sag(const VectorXd& h, Index z, const QualityOptions& o, QualityReport& rep) {
+  const Index p = h.size() - 1 - z;
+  VectorXd s(p + 1);
+  double acc = 0.0;
+  for (Index k = 0; k <= p; ++k) s[k] = (acc += h[z + k]);
+  Index ipk = 0;
+  s.cwiseAbs().maxCoeff(&ipk);
+  const Index q = std::max<Index>(2, (p + 1) / 4);
+  const double step_tail = s.tail(q).mean() * (s[ipk] >= 0 ? 1.0 : -1.0) / std::abs(s[ipk]);
+  rep.figures.emplace_back("step_tail_ratio", step_tail);
+  if (step_tail < o.sag_ratio && !rep.find("coupling_mismatch")) {
+    add(rep, "coupling_mismatch", Severity::kWarning,
+        fmt::format("The step response derived from the data falls back to {:.0f} % of its "
+                    "peak within the window (a slow opposite-sign tail): the output is probably "
+                    "AC coupled without a matched network on the input{}.",
+                    100.0 * step_tail,
+                    o.coupling_rc_s ? fmt::format(" (declared RC {:.3g} s)", *o.coupling_rc_s) : ""),
+        step_tail, o.sag_ratio);
+  }
+}
+
 // The checks that need the correlations; skipped after no_response (nothing to judge).
 void check_response(const Correlations& c, const QualityOptions& o, QualityReport& rep) {
-  const Index z = c.ryu.zero_index, n = c.ryu.size(), p = n - 1 - z;
+  const Index z = c.ryu.zero_index, n = c.ryu.size();
   const double scale = std::sqrt(c.ruu(0) * c.ryy(0));
   const double sigma = bartlett_sigma(c, n - 1);
   const VectorXd rho = scale > 0.0 ? VectorXd(c.ryu.r / scale) : VectorXd::Zero(n);
@@ -179,39 +221,8 @@ void check_response(const Correlations& c, const QualityOptions& o, QualityRepor
         acausal, o.acausal_warning);
     if (acausal > o.acausal_fatal) return;
   }
-  // Undecayed: |r_yu| over the last tenth of the positive lags against its peak.
-  const Index tail_n = std::max<Index>(3, p / 10);
-  const double pos_peak = rho.tail(p + 1).cwiseAbs().maxCoeff();
-  const double tail = rho.tail(tail_n).cwiseAbs().maxCoeff();
-  rep.figures.emplace_back("tail_ratio", tail / pos_peak);
-  if (tail / pos_peak > o.undecayed_ratio && tail > 3.0 * sigma) {
-    add(rep, "undecayed", Severity::kWarning,
-        fmt::format("The cross-correlation is still at {:.0f} % of its peak at the end of the "
-                    "lag window ({:.3g} s): lengthen the window (--lags), remove drift from the "
-                    "recording, or check that both channels have the same AC coupling.",
-                    100.0 * tail / pos_peak, c.ryu.lag_s(n - 1)),
-        tail / pos_peak, o.undecayed_ratio);
-  }
-  // Sag: the step response s = cumulative sum of h over lags >= 0, its last quarter's mean
-  // against its largest excursion. A type-0 plant settles near its peak; an output that is
-  // AC coupled alone returns towards zero (a slow opposite-sign tail in h).
-  VectorXd s(p + 1);
-  double acc = 0.0;
-  for (Index k = 0; k <= p; ++k) s[k] = (acc += h[z + k]);
-  Index ipk = 0;
-  s.cwiseAbs().maxCoeff(&ipk);
-  const Index q = std::max<Index>(2, (p + 1) / 4);
-  const double step_tail = s.tail(q).mean() * (s[ipk] >= 0 ? 1.0 : -1.0) / std::abs(s[ipk]);
-  rep.figures.emplace_back("step_tail_ratio", step_tail);
-  if (step_tail < o.sag_ratio && !rep.find("coupling_mismatch")) {
-    add(rep, "coupling_mismatch", Severity::kWarning,
-        fmt::format("The step response derived from the data falls back to {:.0f} % of its "
-                    "peak within the window (a slow opposite-sign tail): the output is probably "
-                    "AC coupled without a matched network on the input{}.",
-                    100.0 * step_tail,
-                    o.coupling_rc_s ? fmt::format(" (declared RC {:.3g} s)", *o.coupling_rc_s) : ""),
-        step_tail, o.sag_ratio);
-  }
+  check_decay(c, rho, sigma, o, rep);
+  check_sag(h, z, o, rep);
 }
 
 void check_excitation(const Correlations& c, const QualityOptions& o, QualityReport& rep) {

@@ -9,6 +9,7 @@
 #include "cli_runner.hpp"
 #include "rig/ident/transfer_function.hpp"
 #include "rig/io/recording_writer.hpp"
+#include "rig/signal/ac_coupling.hpp"
 #include "rig/signal/excitation.hpp"
 
 namespace rig {
@@ -102,6 +103,35 @@ TEST(IdentifyCli, SwappedChannelsFailTheDataQualityChecks) {
   const auto rep = nlohmann::json::parse(testing::slurp(dir / "out" / "report.json"));
   EXPECT_EQ(rep["status"], "data_quality_failed");
   EXPECT_FALSE(std::filesystem::exists(dir / "out" / "model.json"));
+}
+
+// Raw and AC-coupled channels side by side, the output's network twice as fast as the
+// input's: the coupled pair is not matched, the run stops with exit 1.
+TEST(IdentifyCli, MismatchedCouplingNetworksFailTheDataQualityChecks) {
+  const auto dir = scratch("coupling");
+  signal::GaussianOptions g;
+  g.n = 8192;
+  g.dt_s = kDt;
+  g.bandwidth_hz = 4.0;
+  g.seed = kSeed;
+  const Eigen::VectorXd u = signal::gaussian_excitation(g);
+  const Eigen::VectorXd y = ident::simulate(plant(), u, kDt);
+  const Eigen::VectorXd u_ac = signal::ac_couple(u, kDt, 1.59);
+  const Eigen::VectorXd y_ac = signal::ac_couple(y, kDt, 0.8);
+  io::Sidecar meta;
+  meta.coupling_rc_s = 1.59;
+  meta.coupled_columns = {"u_ac", "y_ac"};
+  io::RecordingWriter writer(dir / "rec.csv", {"t", "u", "y", "u_ac", "y_ac"}, meta);
+  for (Eigen::Index i = 0; i < g.n; ++i) writer.append({kDt * double(i), u[i], y[i], u_ac[i], y_ac[i]});
+  writer.close();
+  const auto r = run_rig("identify --recording " + (dir / "rec.csv").string() +
+                             " --input u_ac --output y_ac --order 2/0 --json --out " + (dir / "out").string(), dir);
+  EXPECT_EQ(r.exit_code, 1) << r.err;
+  const auto rep = nlohmann::json::parse(r.out);
+  ASSERT_FALSE(rep["quality"]["flags"].empty());
+  EXPECT_EQ(rep["quality"]["flags"][0]["name"], "coupling_mismatch");
+  EXPECT_NEAR(rep["quality"]["figures"]["coupling_rc_y_ac_s"].get<double>(), 0.8, 0.01);
+  EXPECT_NEAR(rep["quality"]["figures"]["coupling_rc_u_ac_s"].get<double>(), 1.59, 0.02);
 }
 
 TEST(IdentifyCli, DryerValidationFitOnSecondHalf) {
