@@ -49,7 +49,11 @@ double fade_out(long j, long n) {
 
 // Samples the supervisor's soft start takes to reach full scale.
 constexpr double kFadeOutS = 2.0;
-constexpr double kSinePeakToRms = 2.0;
+// The supervisor's statistical cap holds the request's mean square for tens of seconds, so in
+// a stepped sine it would mix the previous point's amplitude with this point's gain; the
+// sweep's amplitudes are planned per frequency from the model instead (0 disables the cap;
+// the envelope back-off and the trip stay in force).
+constexpr double kSinePeakToRms = 0.0;
 
 long soft_start_samples(const SupervisorConfig& s) {
   return static_cast<long>(std::ceil(1.0 / (s.backoff.recover_rate_per_s * s.dt_s))) + 1;
@@ -214,9 +218,10 @@ bool Sequencer::excite() {
   return ok;
 }
 
-// Largest sine amplitude that cannot breach the plan if the excitation stops at its peak
-// (trip, back-off): a step of A gives a peak of A |K| (1 + overshoot) for a second-order
-// mode, overshoot = exp(-pi zeta / sqrt(1 - zeta^2)); without a valid model, overshoot 1.
+// Largest sine amplitude whose sudden stop (a trip, or the step from one point to the next,
+// which starts at phase zero) stays below the supervisor's back-off threshold: a step of A
+// gives a peak of A |K| (1 + overshoot) for a second-order mode, overshoot =
+// exp(-pi zeta / sqrt(1 - zeta^2)); without a valid model, overshoot 1.
 double Sequencer::step_safe_amplitude_pct(const ident::TransferFunction& prior,
                                           const ident::DerivedFigures& d) const {
   const double gain = std::abs(prior.dc_gain());
@@ -226,7 +231,9 @@ double Sequencer::step_safe_amplitude_pct(const ident::TransferFunction& prior,
   }
   const double band_kw = data_.config.safety.band_pct / 100.0 * p0_kw_;
   if (!(gain > 0.0) || !std::isfinite(gain)) return data_.config.safety.clamp_pct;
-  return data_.config.safety.plan_fraction * band_kw / (gain * (1.0 + overshoot));
+  const double fraction = std::min(data_.config.safety.plan_fraction,
+                                   0.9 * supervisor_config().backoff.start_fraction);
+  return fraction * band_kw / (gain * (1.0 + overshoot));
 }
 
 bool Sequencer::sweep() {

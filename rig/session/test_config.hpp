@@ -85,8 +85,8 @@ struct SweepSettings {
   int points = 16;              // log-spaced
   double settle_cycles = 3.0;   // at least this many cycles settle after each change
   double integrate_cycles = 8.0;  // at least this many whole cycles are integrated
-  double settle_time_constants = 5.0;  // and settle this many slowest time constants
-  double min_integrate_s = 4.0;  // and integrate at least this long
+  double settle_time_constants = 8.0;  // and settle this many slowest time constants
+  double min_integrate_s = 10.0;  // and integrate at least this long (noise, drift)
 };
 
 struct CompareSettings {
