@@ -209,17 +209,23 @@ void check_response(const Correlations& c, const QualityOptions& o, QualityRepor
         peak_sigma, o.significance_sigma);
     return;
   }
+  // The deconvolution is ill-conditioned for a strongly coloured input, so a fatal verdict
+  // also needs the raw cross-correlation's peak at a negative lag.
+  Index peak_at = 0;
+  rho.cwiseAbs().maxCoeff(&peak_at);
+  rep.figures.emplace_back("peak_lag_s", c.ryu.lag_s(peak_at));
   const VectorXd h = impulse_response(c, o.regularisation);
   const double acausal = h.head(z).squaredNorm() / h.squaredNorm();
   rep.figures.emplace_back("acausal_fraction", acausal);
+  const bool fatal = acausal > o.acausal_fatal && peak_at < z;
   if (acausal > o.acausal_warning) {
-    add(rep, "acausal", acausal > o.acausal_fatal ? Severity::kFatal : Severity::kWarning,
+    add(rep, "acausal", fatal ? Severity::kFatal : Severity::kWarning,
         fmt::format("{:.0f} % of the impulse response lies at negative lags (the output moves "
                     "before the input): the input and output channels are probably swapped, or "
                     "their time stamps are skewed.",
                     100.0 * acausal),
         acausal, o.acausal_warning);
-    if (acausal > o.acausal_fatal) return;
+    if (fatal) return;
   }
   check_decay(c, rho, sigma, o, rep);
   check_sag(h, z, o, rep);

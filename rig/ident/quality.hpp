@@ -3,7 +3,8 @@
 // on. Fatal flags mean an estimate from these data would be meaningless.
 //
 //   no_response               fatal    no significant cross-correlation peak
-//   acausal                   fatal/w  impulse-response mass at negative lags
+//   acausal                   fatal/w  impulse-response mass at negative lags (fatal only
+//                                      when the cross-correlation also peaks at a negative lag)
 //   not_persistently_exciting fatal    too few excited frequencies for the order asked
 //   input_clipped             fatal/w  flat tops at the input's extremes
 //   output_clipped            fatal/w  flat tops at the output's extremes
@@ -72,7 +73,7 @@ struct QualityOptions {
 
 struct QualityReport {
   std::vector<QualityFlag> flags;
-  // Figures behind every check, fired or not (for report.json): peak_sigma,
+  // Figures behind every check, fired or not (for report.json): peak_sigma, peak_lag_s,
   // acausal_fraction, excited_lines, required_lines, input_clip_fraction,
   // output_clip_fraction, tail_ratio, step_tail_ratio, jitter_ratio, coupling_rc_<name>_s.
   std::vector<std::pair<std::string, double>> figures;
