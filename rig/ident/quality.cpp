@@ -220,10 +220,15 @@ void check_response(const Correlations& c, const QualityOptions& o, QualityRepor
   const bool fatal = acausal > o.acausal_fatal && peak_at < z;
   if (acausal > o.acausal_warning) {
     add(rep, "acausal", fatal ? Severity::kFatal : Severity::kWarning,
-        fmt::format("{:.0f} % of the impulse response lies at negative lags (the output moves "
-                    "before the input): the input and output channels are probably swapped, or "
-                    "their time stamps are skewed.",
-                    100.0 * acausal),
+        fatal ? fmt::format("{:.0f} % of the impulse response lies at negative lags (the output "
+                            "moves before the input): the input and output channels are probably "
+                            "swapped, or their time stamps are skewed.",
+                            100.0 * acausal)
+              : fmt::format("{:.0f} % of the impulse response deconvolved from the correlations "
+                            "lies at negative lags although the cross-correlation peaks at a "
+                            "positive lag: check the channel order and time stamps; a strongly "
+                            "coloured input or a short lag window also causes this.",
+                            100.0 * acausal),
         acausal, o.acausal_warning);
     if (fatal) return;
   }
