@@ -79,14 +79,18 @@ void rank(std::vector<HypothesisFit>& hs) {
                    [](const HypothesisFit& a, const HypothesisFit& b) { return a.score > b.score; });
 }
 
+// The best hypothesis above min_gain; when the input tests failed, one with an input-side
+// effect, unless none of those reaches min_gain (then a disturbance alone explains it).
 int choose(const DiagnoseResult& r, double min_gain) {
   const bool input = r.location.input_mismatch;
+  int best_any = -1;
   for (std::size_t i = 0; i < r.hypotheses.size(); ++i) {
     const auto& h = r.hypotheses[i];
     if (h.score < min_gain) break;
+    if (best_any < 0) best_any = static_cast<int>(i);
     if (!input || has_input_side(h)) return static_cast<int>(i);
   }
-  return -1;
+  return best_any;
 }
 
 // The verdict word of a chosen hypothesis: its input-side effect (the first listed, pairs

@@ -7,7 +7,8 @@
 // grid (+-1.5 bins).
 // Drift: the residual smoothed over tau_d = max(50 dt, T/40) carries more than 10 % of its
 // variance and 30 times what white noise would leave (dt / tau_d), and is not the smoothed
-// model output's shadow (|corr| < 0.3; a missing low-frequency dynamic would be).
+// model output's shadow (|corr| < 0.7; a missing low-frequency dynamic would be near 1,
+// while two independent slow records of T/tau_d effective samples correlate by chance).
 #include <algorithm>
 #include <cmath>
 #include <numbers>
@@ -73,7 +74,7 @@ Disturbances locate_disturbances(const Problem& pr, const Eigen::VectorXd& r,
   const Eigen::VectorXd zs =
       smooth_zero_phase(pr.baseline_z.tail(r.size() - from), d.drift_tau_s, pr.dt_s);
   d.drift = d.drift_ratio > 0.1 && d.drift_ratio > 30.0 * pr.dt_s / d.drift_tau_s &&
-            std::abs(corr(s, zs)) < 0.3;
+            std::abs(corr(s, zs)) < 0.7;
   return d;
 }
 
