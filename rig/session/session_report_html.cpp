@@ -61,6 +61,28 @@ void summary(report::HtmlReport& page, const SessionData& d) {
   page.section("Summary").key_values(kv);
 }
 
+// Phase of each curve: the first (continuous) curve unwrapped along frequency, the others
+// (sparse measured points) moved by whole turns to the branch nearest to it.
+std::vector<report::Series> phase_series(const std::vector<double>& f,
+                                         const std::vector<report::BodeCurve>& curves) {
+  std::vector<report::Series> out;
+  std::vector<double> reference;
+  for (const auto& c : curves) {
+    report::Series s{c.label, {}, c.color, false, c.points, c.points ? 0.0 : 1.5};
+    double previous = kNaN;
+    for (std::size_t i = 0; i < f.size(); ++i) {
+      double p = std::arg(c.response[i]) * 180.0 / M_PI;
+      const double near = reference.empty() ? previous : reference[i];
+      if (std::isfinite(p) && std::isfinite(near)) p += 360.0 * std::round((near - p) / 360.0);
+      if (std::isfinite(p)) previous = p;
+      s.y.push_back(p);
+    }
+    if (reference.empty()) reference = s.y;
+    out.push_back(s);
+  }
+  return out;
+}
+
 void bode(report::HtmlReport& page, const SessionData& d) {
   if (!d.mmfm && d.sweep.empty() && d.h1.empty()) return;
   const double f_lo = std::min(0.1, d.config.sweep.from_hz);
@@ -84,21 +106,23 @@ void bode(report::HtmlReport& page, const SessionData& d) {
     for (double x : f) m.response.push_back(d.mmfm->model.response(x));
     curves.push_back(m);
   }
-  if (!d.sweep.empty()) curves.push_back({"swept sine", measured(d.sweep), {}, {}, true, ""});
-  if (!d.h1.empty()) curves.push_back({"H1 (noise-driven)", measured(d.h1), {}, {}, true, ""});
+  if (!d.sweep.empty()) curves.push_back({"swept sine", measured(d.sweep), {}, {}, true, "#d62728"});
+  if (!d.h1.empty()) curves.push_back({"H1 (noise-driven)", measured(d.h1), {}, {}, true, "#2ca02c"});
   auto [mag, phase] = report::bode_charts("Frequency response, kW per % bias", f, curves);
+  phase.series = phase_series(f, curves);
   page.section("Frequency response").chart(mag).chart(phase);
   report::Chart coh{"Coherence", "frequency (Hz)", "coherence", f, {}, {}, true, false, 220};
-  auto coherence = [&](const std::vector<fra::FrfPoint>& pts, const std::string& label) {
-    report::Series s{label, std::vector<double>(f.size(), kNaN), "", false, true, 1.5};
+  auto coherence = [&](const std::vector<fra::FrfPoint>& pts, const std::string& label,
+                       const std::string& color) {
+    report::Series s{label, std::vector<double>(f.size(), kNaN), color, false, true, 1.5};
     for (const auto& p : pts) {
       const auto it = std::lower_bound(f.begin(), f.end(), p.freq_hz);
       if (it != f.end() && *it == p.freq_hz) s.y[static_cast<std::size_t>(it - f.begin())] = p.coherence;
     }
     coh.series.push_back(s);
   };
-  if (!d.sweep.empty()) coherence(d.sweep, "swept sine");
-  if (!d.h1.empty()) coherence(d.h1, "H1");
+  if (!d.sweep.empty()) coherence(d.sweep, "swept sine", "#d62728");
+  if (!d.h1.empty()) coherence(d.h1, "H1", "#2ca02c");
   if (!coh.series.empty()) page.chart(coh);
 }
 
@@ -127,7 +151,10 @@ void correlations(report::HtmlReport& page, const SessionData& d) {
 
 void convergence(report::HtmlReport& page, const SessionData& d) {
   std::vector<const BlockEstimate*> ok;
-  for (const auto& e : d.history) if (e.ok && e.derived.valid) ok.push_back(&e);
+  // From the third block on: the standard errors need three blocks of spread.
+  for (const auto& e : d.history) {
+    if (e.ok && e.derived.valid && e.block >= 3) ok.push_back(&e);
+  }
   if (ok.empty()) return;
   page.section("Parameter convergence (estimate +- 1 standard error)");
   auto chart = [&](const std::string& name, auto value, auto se) {
