@@ -4,9 +4,11 @@
 // report.html and augmented_model.json. Exit 0 when the diagnosis ran (whatever the
 // verdict), 2 for bad input (one line naming the file/field and what was expected).
 // The model is a transfer-function JSON; a plantsim TOML plant is not accepted yet.
-#include <CLI/CLI.hpp>
+#include "rig/cli/diagnose.hpp"
+
 #include <fmt/format.h>
 
+#include <CLI/CLI.hpp>
 #include <algorithm>
 #include <cctype>
 #include <cmath>
@@ -16,7 +18,6 @@
 #include <string>
 
 #include "rig/cli/commands.hpp"
-#include "rig/cli/diagnose.hpp"
 #include "rig/diagnose/diagnose.hpp"
 #include "rig/diagnose/report_out.hpp"
 #include "rig/io/input_error.hpp"
@@ -47,14 +48,16 @@ io::Recording load(const DiagnoseArgs& a, std::string& in, std::string& out) {
     if (comma == std::string::npos) bad("rig diagnose", "--columns", "expected I,J (1-based)");
     in = a.columns.substr(0, comma), out = a.columns.substr(comma + 1);
   }
-  if (in.empty() != out.empty()) bad("rig diagnose", "--input/--output", "give both columns, or neither");
+  if (in.empty() != out.empty())
+    bad("rig diagnose", "--input/--output", "give both columns, or neither");
   if (in.empty()) in = "u", out = "y";
   ro.columns = {in, out};
   io::Recording rec = io::read_recording(a.recording, ro);
   in = rec.names[0], out = rec.names[1];
   if (!rec.sampling.uniform)
-    bad(rec.source, rec.time_name, fmt::format("expected uniform sampling, found jitter up to {:.3g} s at dt {:.3g} s",
-                                               rec.sampling.jitter_max_s, rec.dt_s));
+    bad(rec.source, rec.time_name,
+        fmt::format("expected uniform sampling, found jitter up to {:.3g} s at dt {:.3g} s",
+                    rec.sampling.jitter_max_s, rec.dt_s));
   if (rec.sidecar.sample_rate_hz && rec.sampling.has_time && !a.dt_s &&
       std::abs(1.0 / *rec.sidecar.sample_rate_hz - rec.dt_s) > 0.01 * rec.dt_s)
     bad(io::sidecar_path(a.recording).string(), "sample_rate_hz",
@@ -76,21 +79,25 @@ void check_units(const io::Recording& rec, const io::ModelFile& m, const std::st
   const std::pair<const char*, const std::string*> sides[] = {{"input", &in}, {"output", &out}};
   for (const auto& [side, col] : sides) {
     const auto it = rec.sidecar.units.find(*col);
-    if (!m.units.contains(side) || !m.units[side].is_string() || it == rec.sidecar.units.end()) continue;
+    if (!m.units.contains(side) || !m.units[side].is_string() || it == rec.sidecar.units.end())
+      continue;
     const std::string mu = m.units[side].get<std::string>();
     if (unit_word(mu) != unit_word(it->second))
       bad(model_file, std::string("units.") + side,
-          fmt::format("expected the recording's unit \"{}\" for column {}, found \"{}\"", it->second, *col, mu));
+          fmt::format("expected the recording's unit \"{}\" for column {}, found \"{}\"",
+                      it->second, *col, mu));
   }
 }
 
 // The sidecar's coupling applies to the model when the output column went through the
 // coupler and the input column did not (a coupled pair keeps the linear relation).
-std::optional<double> output_coupling(const io::Recording& rec, const std::string& in, const std::string& out) {
+std::optional<double> output_coupling(const io::Recording& rec, const std::string& in,
+                                      const std::string& out) {
   const auto& sc = rec.sidecar;
   if (!sc.coupling_rc_s) return std::nullopt;
   const auto has = [&](const std::string& c) {
-    return std::find(sc.coupled_columns.begin(), sc.coupled_columns.end(), c) != sc.coupled_columns.end();
+    return std::find(sc.coupled_columns.begin(), sc.coupled_columns.end(), c) !=
+           sc.coupled_columns.end();
   };
   if (sc.coupled_columns.empty()) return sc.coupling_rc_s;
   return has(out) && !has(in) ? sc.coupling_rc_s : std::nullopt;
@@ -99,15 +106,18 @@ std::optional<double> output_coupling(const io::Recording& rec, const std::strin
 int run_diagnose(const DiagnoseArgs& a) {
   const std::string ext = a.model.extension().string();
   if (ext == ".toml")
-    bad(a.model.string(), "", "plantsim TOML plants are not supported by diagnose yet; give a "
-                              "transfer-function model JSON (e.g. plantsim's linearised *.tf.json)");
+    bad(a.model.string(), "",
+        "plantsim TOML plants are not supported by diagnose yet; give a "
+        "transfer-function model JSON (e.g. plantsim's linearised *.tf.json)");
   std::string in, out;
   const io::Recording rec = load(a, in, out);
   const io::ModelFile model = io::read_model(a.model);
   check_units(rec, model, a.model.string(), in, out);
   if (!model.tf.is_stable())
-    bad(a.model.string(), "den", "expected a stable model (every pole in the open left half plane)");
-  diagnose::DiagnoseInput di{model.tf, rec.column(in), rec.column(out), rec.dt_s, output_coupling(rec, in, out)};
+    bad(a.model.string(), "den",
+        "expected a stable model (every pole in the open left half plane)");
+  diagnose::DiagnoseInput di{model.tf, rec.column(in), rec.column(out), rec.dt_s,
+                             output_coupling(rec, in, out)};
   diagnose::DiagnoseOptions opt;
   opt.try_pairs = !a.no_pairs;
   diagnose::DiagnoseResult r;
@@ -136,14 +146,17 @@ int run_diagnose(const DiagnoseArgs& a) {
 void add_diagnose_command(CLI::App& app) {
   auto a = std::make_shared<DiagnoseArgs>();
   CLI::App* cmd = app.add_subcommand(
-      "diagnose", "Find why a model and a recording disagree: locate the mismatch, fit the "
-                  "effects of DESIGN.md 9, write report.json, report.html, augmented_model.json");
-  cmd->add_option("--recording", a->recording, "Recording CSV (sidecar JSON beside it is read)")->required();
+      "diagnose",
+      "Find why a model and a recording disagree: locate the mismatch, fit the "
+      "effects of DESIGN.md 9, write report.json, report.html, augmented_model.json");
+  cmd->add_option("--recording", a->recording, "Recording CSV (sidecar JSON beside it is read)")
+      ->required();
   cmd->add_option("--model", a->model, "Transfer-function model JSON")->required();
   cmd->add_option("--input", a->input, "Input column (default u)");
   cmd->add_option("--output", a->output, "Output column (default y)");
   cmd->add_option("--columns", a->columns, "Input and output columns by 1-based index: I,J")
-      ->excludes(cmd->get_option("--input"))->excludes(cmd->get_option("--output"));
+      ->excludes(cmd->get_option("--input"))
+      ->excludes(cmd->get_option("--output"));
   cmd->add_option("--dt", a->dt_s, "Sample period in s (overrides the time column and sidecar)");
   cmd->add_option("--out", a->out, "Output folder")->required();
   cmd->add_flag("--no-pairs", a->no_pairs, "Do not try pairs of effects");

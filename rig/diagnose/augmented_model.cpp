@@ -1,10 +1,9 @@
 #include "rig/diagnose/augmented_model.hpp"
 
+#include <Eigen/Dense>
 #include <cmath>
 #include <numbers>
 #include <stdexcept>
-
-#include <Eigen/Dense>
 
 #include "rig/diagnose/blocks.hpp"
 #include "rig/signal/ac_coupling.hpp"
@@ -45,8 +44,7 @@ void set_mode_damping(ident::TransferFunction& tf, double zeta) {
     }
     roots(k++) = p(i);
   }
-  const std::complex<double> disc =
-      std::sqrt(std::complex<double>(zeta * zeta - 1.0, 0.0));
+  const std::complex<double> disc = std::sqrt(std::complex<double>(zeta * zeta - 1.0, 0.0));
   roots(k++) = wn * (-zeta + disc);
   roots(k++) = wn * (-zeta - disc);
   tf.den = tf.den(0) * poly_from_roots(roots.head(k));
@@ -55,9 +53,13 @@ void set_mode_damping(ident::TransferFunction& tf, double zeta) {
 void apply_linear(ident::TransferFunction& tf, const AppliedEffect& e) {
   const auto& p = e.params;
   switch (e.effect) {
-    case Effect::kDeadTime: tf.delay_s = std::max(0.0, tf.delay_s + p[0]); break;
+    case Effect::kDeadTime:
+      tf.delay_s = std::max(0.0, tf.delay_s + p[0]);
+      break;
     case Effect::kExtraLag:
-    case Effect::kSensorLag: tf.den = poly_multiply(tf.den, vec({p[0], 1.0})); break;
+    case Effect::kSensorLag:
+      tf.den = poly_multiply(tf.den, vec({p[0], 1.0}));
+      break;
     case Effect::kResonance: {
       // (s^2 + 2 zeta r w s + w^2) / (s^2 + 2 zeta w s + w^2): unity away from w, a peak
       // of r at w (a notch when r < 1). Scaled by 1/w^2 for conditioning.
@@ -70,21 +72,32 @@ void apply_linear(ident::TransferFunction& tf, const AppliedEffect& e) {
       tf.num = poly_multiply(tf.num, vec({p[0], 0.0}));
       tf.den = poly_multiply(tf.den, vec({p[0], 1.0}));
       break;
-    case Effect::kLoadDamping: set_mode_damping(tf, p[0]); break;
-    case Effect::kGainChange: tf.num *= p[0]; break;
-    default: break;
+    case Effect::kLoadDamping:
+      set_mode_damping(tf, p[0]);
+      break;
+    case Effect::kGainChange:
+      tf.num *= p[0];
+      break;
+    default:
+      break;
   }
 }
 
 Eigen::VectorXd apply_input(const Problem& pr, const AppliedEffect& e, Eigen::VectorXd v) {
   const auto& p = e.params;
   switch (e.effect) {
-    case Effect::kDeadband: return deadband(v, p[0]);
-    case Effect::kBacklash: return backlash(v, p[0]);
-    case Effect::kSaturation: return saturate(v, -p[1], p[0]);
-    case Effect::kRateLimit: return rate_limit(v, p[0], pr.dt_s);
-    case Effect::kStaticNonlinearity: return polynomial(v, p[0], p[1], pr.scales.u_std);
-    default: return v;
+    case Effect::kDeadband:
+      return deadband(v, p[0]);
+    case Effect::kBacklash:
+      return backlash(v, p[0]);
+    case Effect::kSaturation:
+      return saturate(v, -p[1], p[0]);
+    case Effect::kRateLimit:
+      return rate_limit(v, p[0], pr.dt_s);
+    case Effect::kStaticNonlinearity:
+      return polynomial(v, p[0], p[1], pr.scales.u_std);
+    default:
+      return v;
   }
 }
 
@@ -151,7 +164,8 @@ void finish_problem(Problem& pr) {
   s.dc_gain = pr.tf.dc_gain();
   if (!std::isfinite(s.dc_gain) || std::abs(s.dc_gain) < 1e-12) {
     double peak = 0.0;
-    for (double f = 1e-3; f < 0.5 / pr.dt_s; f *= 1.05) peak = std::max(peak, std::abs(pr.tf.response(f)));
+    for (double f = 1e-3; f < 0.5 / pr.dt_s; f *= 1.05)
+      peak = std::max(peak, std::abs(pr.tf.response(f)));
     s.dc_gain = peak > 0.0 ? peak : 1.0;
   }
   if (pr.active_to < 0 || pr.active_to > n) pr.active_to = n;
@@ -194,14 +208,14 @@ ModelOutput model_output(const Problem& pr, std::span<const AppliedEffect> effec
   Eigen::MatrixXd x(n, periodic ? 3 : 1);
   x.col(0).setOnes();
   if (periodic) {
-    const Eigen::ArrayXd t = Eigen::ArrayXd::LinSpaced(n, 0.0, static_cast<double>(n - 1)) * pr.dt_s;
+    const Eigen::ArrayXd t =
+        Eigen::ArrayXd::LinSpaced(n, 0.0, static_cast<double>(n - 1)) * pr.dt_s;
     x.col(1) = (kTwoPi * periodic->params[0] * t).cos().matrix();
     x.col(2) = (kTwoPi * periodic->params[0] * t).sin().matrix();
   }
   const Eigen::VectorXd sw = pr.est_weight.sqrt().matrix();
-  const Eigen::VectorXd beta = (sw.asDiagonal() * x)
-                                   .colPivHouseholderQr()
-                                   .solve(sw.asDiagonal() * (pr.y - z));
+  const Eigen::VectorXd beta =
+      (sw.asDiagonal() * x).colPivHouseholderQr().solve(sw.asDiagonal() * (pr.y - z));
   out.yhat = z + x * beta;
   if (periodic) {
     out.derived.emplace_back("amplitude", std::hypot(beta(1), beta(2)));

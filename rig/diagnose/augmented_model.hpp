@@ -2,13 +2,12 @@
 // hypotheses (effects.hpp gives the signal path).
 #pragma once
 
+#include <Eigen/Core>
 #include <optional>
 #include <span>
 #include <string>
 #include <utility>
 #include <vector>
-
-#include <Eigen/Core>
 
 #include "rig/diagnose/effects.hpp"
 #include "rig/ident/transfer_function.hpp"
@@ -16,18 +15,18 @@
 namespace rig::diagnose {
 
 struct Problem {
-  ident::TransferFunction tf;          // the baseline model
+  ident::TransferFunction tf;  // the baseline model
   double dt_s = 0.01;
-  std::optional<double> output_rc_s;   // the recording's declared AC coupling of y only
-  Eigen::VectorXd u, y;                // operating point (mean) removed
-  Eigen::ArrayXd est_weight;           // 1 on estimation samples, else 0
-  Eigen::ArrayXd val_weight;           // 1 on validation samples, else 0
+  std::optional<double> output_rc_s;  // the recording's declared AC coupling of y only
+  Eigen::VectorXd u, y;               // operating point (mean) removed
+  Eigen::ArrayXd est_weight;          // 1 on estimation samples, else 0
+  Eigen::ArrayXd val_weight;          // 1 on validation samples, else 0
   // Input-side effects act on [active_from, active_to) only (a fault that came and went,
   // located in time); the baseline output elsewhere.
   Eigen::Index active_from = 0;
-  Eigen::Index active_to = -1;         // -1: to the end
+  Eigen::Index active_to = -1;  // -1: to the end
   DataScales scales;
-  Eigen::VectorXd baseline_z;          // simulate(tf, u) before output coupling
+  Eigen::VectorXd baseline_z;  // simulate(tf, u) before output coupling
 };
 
 struct ModelOutput {

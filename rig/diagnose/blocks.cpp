@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
-
 #include <unsupported/Eigen/MatrixFunctions>
 
 namespace rig::diagnose {
@@ -119,7 +118,8 @@ Eigen::VectorXd smooth_zero_phase(const Eigen::VectorXd& x, double tau_s, double
   const Eigen::Index n = x.size();
   if (n == 0) return x;
   const double a = std::exp(-dt_s / std::max(tau_s, 1e-12));
-  const Eigen::Index head = std::min<Eigen::Index>(n, std::max<Eigen::Index>(1, std::llround(tau_s / dt_s)));
+  const Eigen::Index head =
+      std::min<Eigen::Index>(n, std::max<Eigen::Index>(1, std::llround(tau_s / dt_s)));
   Eigen::VectorXd f(n);
   double s = x.head(head).mean();
   for (Eigen::Index k = 0; k < n; ++k) f(k) = s = a * s + (1.0 - a) * x(k);

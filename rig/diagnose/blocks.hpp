@@ -3,9 +3,8 @@
 // simulation of a rational transfer function closed through an output nonlinearity.
 #pragma once
 
-#include <functional>
-
 #include <Eigen/Core>
+#include <functional>
 
 #include "rig/ident/transfer_function.hpp"
 
@@ -22,8 +21,7 @@ Eigen::VectorXd saturate(const Eigen::VectorXd& u, double lower, double upper);
 Eigen::VectorXd rate_limit(const Eigen::VectorXd& u, double rate_per_s, double dt_s);
 // Static polynomial about the operating point, coefficients relative to sigma = std(u):
 //   v = u + c2 u^2 / sigma + c3 u^3 / sigma^2.
-Eigen::VectorXd polynomial(const Eigen::VectorXd& u, double c2_rel, double c3_rel,
-                           double sigma);
+Eigen::VectorXd polynomial(const Eigen::VectorXd& u, double c2_rel, double c3_rel, double sigma);
 
 // Polynomial product (coefficients highest power first).
 Eigen::VectorXd poly_multiply(const Eigen::VectorXd& a, const Eigen::VectorXd& b);
@@ -36,9 +34,8 @@ Eigen::VectorXd poly_from_roots(const Eigen::VectorXcd& roots);
 // (ud_k + ud_{k+1}) / 2, which has no half-sample lag, so f = 0 reproduces simulate() to
 // second order in dt.
 using OutputFeedback = std::function<double(double z, double dz)>;
-Eigen::VectorXd simulate_with_feedback(const ident::TransferFunction& tf,
-                                       const Eigen::VectorXd& u, double dt_s,
-                                       const OutputFeedback& feedback);
+Eigen::VectorXd simulate_with_feedback(const ident::TransferFunction& tf, const Eigen::VectorXd& u,
+                                       double dt_s, const OutputFeedback& feedback);
 
 // Zero-phase exponential smoother (forward then backward first-order low-pass, time
 // constant tau each way): the drift estimate of a residual.

@@ -1,9 +1,9 @@
 #include "rig/diagnose/concealed.hpp"
 
+#include <fmt/format.h>
+
 #include <cmath>
 #include <numbers>
-
-#include <fmt/format.h>
 
 #include "rig/diagnose/blocks.hpp"
 #include "rig/signal/ac_coupling.hpp"
@@ -37,24 +37,40 @@ Eigen::VectorXd decimate(const Eigen::VectorXd& f) {
 std::vector<double> true_params(Effect e, const DataScales& s, const ident::TransferFunction& tf) {
   const double su = s.u_std;
   switch (e) {
-    case Effect::kDeadTime: return {0.04};
-    case Effect::kExtraLag: return {0.08};
-    case Effect::kResonance: return {3.2, 0.05, 2.5};
-    case Effect::kAcCoupling: return {3.0};
-    case Effect::kSensorLag: return {0.06};
-    case Effect::kDeadband: return {0.3 * su};
-    case Effect::kBacklash: return {0.3 * su};
-    case Effect::kSaturation: return {1.0 * su, 1.6 * su};
-    case Effect::kRateLimit: return {0.4 * s.u_rate_std};
-    case Effect::kStaticNonlinearity: return {0.25, -0.04};
+    case Effect::kDeadTime:
+      return {0.04};
+    case Effect::kExtraLag:
+      return {0.08};
+    case Effect::kResonance:
+      return {3.2, 0.05, 2.5};
+    case Effect::kAcCoupling:
+      return {3.0};
+    case Effect::kSensorLag:
+      return {0.06};
+    case Effect::kDeadband:
+      return {0.3 * su};
+    case Effect::kBacklash:
+      return {0.3 * su};
+    case Effect::kSaturation:
+      return {1.0 * su, 1.6 * su};
+    case Effect::kRateLimit:
+      return {0.4 * s.u_rate_std};
+    case Effect::kStaticNonlinearity:
+      return {0.25, -0.04};
     // Softening, as the synchronising power's sin(delta): hardening would destabilise the
     // lagged loop of this plant (Routh: 3 k3 z^2 K < 0.65) at the excitation's peaks.
-    case Effect::kNonlinearStiffness: return {-0.06};
-    case Effect::kCoulombFriction: return {0.3 * su};
-    case Effect::kLoadDamping: return {2.0 * dominant_mode(tf).value_or(std::make_pair(2.0, 0.1)).second};
-    case Effect::kGainChange: return {0.85};
-    case Effect::kPeriodicDisturbance: return {0.73};
-    case Effect::kDrift: return {30.0};
+    case Effect::kNonlinearStiffness:
+      return {-0.06};
+    case Effect::kCoulombFriction:
+      return {0.3 * su};
+    case Effect::kLoadDamping:
+      return {2.0 * dominant_mode(tf).value_or(std::make_pair(2.0, 0.1)).second};
+    case Effect::kGainChange:
+      return {0.85};
+    case Effect::kPeriodicDisturbance:
+      return {0.73};
+    case Effect::kDrift:
+      return {30.0};
   }
   return {};
 }
@@ -73,10 +89,14 @@ Eigen::VectorXd ou_drift(Eigen::Index n, double dt, double tau, double rms, std:
 
 const char* to_string(Concealment c) {
   switch (c) {
-    case Concealment::kNoise: return "noise";
-    case Concealment::kDrift: return "drift";
-    case Concealment::kAcCoupling: return "ac_coupling";
-    case Concealment::kPartial: return "partial";
+    case Concealment::kNoise:
+      return "noise";
+    case Concealment::kDrift:
+      return "drift";
+    case Concealment::kAcCoupling:
+      return "ac_coupling";
+    case Concealment::kPartial:
+      return "partial";
   }
   return "?";
 }
@@ -103,22 +123,34 @@ Eigen::VectorXd true_output(const ConcealedSpec& spec, const ident::TransferFunc
   Eigen::VectorXd uf = upsample(u);
   const Effect e = *spec.effect;
   switch (e) {
-    case Effect::kDeadband: uf = deadband(uf, p[0]); break;
-    case Effect::kBacklash: uf = backlash(uf, p[0]); break;
-    case Effect::kSaturation: uf = saturate(uf, -p[1], p[0]); break;
-    case Effect::kRateLimit: uf = rate_limit(uf, p[0], dtf); break;
-    case Effect::kStaticNonlinearity: uf = polynomial(uf, p[0], p[1], s.u_std); break;
-    default: break;
+    case Effect::kDeadband:
+      uf = deadband(uf, p[0]);
+      break;
+    case Effect::kBacklash:
+      uf = backlash(uf, p[0]);
+      break;
+    case Effect::kSaturation:
+      uf = saturate(uf, -p[1], p[0]);
+      break;
+    case Effect::kRateLimit:
+      uf = rate_limit(uf, p[0], dtf);
+      break;
+    case Effect::kStaticNonlinearity:
+      uf = polynomial(uf, p[0], p[1], s.u_std);
+      break;
+    default:
+      break;
   }
   if (kind_of(e) == EffectKind::kFeedback) {
-    const double k3 = e == Effect::kNonlinearStiffness ? p[0] / (3 * s.z_std * s.z_std * s.dc_gain) : 0.0;
+    const double k3 =
+        e == Effect::kNonlinearStiffness ? p[0] / (3 * s.z_std * s.z_std * s.dc_gain) : 0.0;
     const double fc = e == Effect::kCoulombFriction ? p[0] : 0.0, eps = 0.05 * s.z_rate_std;
     return decimate(simulate_with_feedback(tf, uf, dtf, [=](double z, double dz) {
       return k3 * z * z * z + fc * std::tanh(dz / eps);
     }));
   }
-  const bool linear_in_model = kind_of(e) == EffectKind::kLinear && e != Effect::kSensorLag &&
-                               e != Effect::kAcCoupling;
+  const bool linear_in_model =
+      kind_of(e) == EffectKind::kLinear && e != Effect::kSensorLag && e != Effect::kAcCoupling;
   const AppliedEffect applied{e, p};
   const ident::TransferFunction t =
       linear_in_model ? augmented_tf(tf, std::span<const AppliedEffect>(&applied, 1)) : tf;
@@ -160,17 +192,20 @@ ConcealedRecording make_concealed(const ConcealedSpec& spec) {
     rec.primary_param = parameter_specs(e, s).front().name;
     what = fmt::format("{} {}={:.4g}", to_string(e), rec.primary_param, rec.truth[0]);
     z = true_output(spec, tf, u, s, rec.truth);
-    const Eigen::ArrayXd t = Eigen::ArrayXd::LinSpaced(n, 0.0, static_cast<double>(n - 1)) * spec.dt_s;
+    const Eigen::ArrayXd t =
+        Eigen::ArrayXd::LinSpaced(n, 0.0, static_cast<double>(n - 1)) * spec.dt_s;
     if (e == Effect::kSensorLag) {
       // The transducer lag filters the plant's own fluctuations as well as the signal.
-      ident::TransferFunction lag{Eigen::VectorXd::Ones(1), Eigen::Vector2d(rec.truth[0], 1.0), 0.0};
+      ident::TransferFunction lag{Eigen::VectorXd::Ones(1), Eigen::Vector2d(rec.truth[0], 1.0),
+                                  0.0};
       z = ident::simulate(lag, z + white(n, sn, spec.seed * 7919 + 2), spec.dt_s);
       noise *= 0.2;
     }
     if (e == Effect::kAcCoupling) z = signal::ac_couple(z, spec.dt_s, rec.truth[0]);
     if (e == Effect::kPeriodicDisturbance)
       z += (0.25 * s.z_std * (2 * std::numbers::pi * rec.truth[0] * t + 0.4).cos()).matrix();
-    if (e == Effect::kDrift) z += ou_drift(n, spec.dt_s, rec.truth[0], 0.5 * s.z_std, spec.seed + 99);
+    if (e == Effect::kDrift)
+      z += ou_drift(n, spec.dt_s, rec.truth[0], 0.5 * s.z_std, spec.seed + 99);
     if (spec.concealment == Concealment::kPartial) z.head(n * 2 / 5) = z_nominal.head(n * 2 / 5);
   }
   Eigen::VectorXd y = z + noise;
@@ -184,8 +219,9 @@ ConcealedRecording make_concealed(const ConcealedSpec& spec) {
   rec.input.u = u.array() + 50.0;
   rec.input.y = y.array() + 3500.0;
   rec.input.dt_s = spec.dt_s;
-  rec.description = fmt::format("{}, concealed by {}, seed {}, {:.0f} s at {:.0f} Hz", what,
-                                to_string(spec.concealment), spec.seed, spec.duration_s, 1.0 / spec.dt_s);
+  rec.description =
+      fmt::format("{}, concealed by {}, seed {}, {:.0f} s at {:.0f} Hz", what,
+                  to_string(spec.concealment), spec.seed, spec.duration_s, 1.0 / spec.dt_s);
   return rec;
 }
 

@@ -20,18 +20,18 @@ enum class Concealment { kNoise, kDrift, kAcCoupling, kPartial };
 const char* to_string(Concealment c);
 
 struct ConcealedSpec {
-  std::optional<Effect> effect;     // nullopt: the null case (the nominal model is right)
+  std::optional<Effect> effect;  // nullopt: the null case (the nominal model is right)
   Concealment concealment = Concealment::kNoise;
   std::uint64_t seed = 1;
   double duration_s = 300.0;
   double dt_s = 0.01;
-  double noise_to_signal = 0.3;     // white noise std over the clean output's std
+  double noise_to_signal = 0.3;  // white noise std over the clean output's std
 };
 
 struct ConcealedRecording {
-  DiagnoseInput input;              // nominal model, recorded u and y (with offsets)
-  std::vector<double> truth;        // the effect's parameters as parameter_specs() names them
-  std::string primary_param;        // the parameter the benchmark checks (truth[0])
+  DiagnoseInput input;        // nominal model, recorded u and y (with offsets)
+  std::vector<double> truth;  // the effect's parameters as parameter_specs() names them
+  std::string primary_param;  // the parameter the benchmark checks (truth[0])
   std::string description;
 };
 

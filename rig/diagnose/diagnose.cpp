@@ -37,14 +37,15 @@ std::vector<HypothesisFit> fit_all(const Problem& pr, const std::vector<Candidat
 }
 
 bool has_input_side(const HypothesisFit& h) {
-  return std::any_of(h.effects.begin(), h.effects.end(),
-                     [](const AppliedEffect& e) { return kind_of(e.effect) != EffectKind::kDisturbance; });
+  return std::any_of(h.effects.begin(), h.effects.end(), [](const AppliedEffect& e) {
+    return kind_of(e.effect) != EffectKind::kDisturbance;
+  });
 }
 
 std::vector<Effect> applicable(const Problem& pr, const Location& loc, const DiagnoseOptions& o) {
   std::vector<Effect> out;
-  const auto& pool = o.effects.empty() ? std::vector<Effect>(kAllEffects.begin(), kAllEffects.end())
-                                       : o.effects;
+  const auto& pool =
+      o.effects.empty() ? std::vector<Effect>(kAllEffects.begin(), kAllEffects.end()) : o.effects;
   for (Effect e : pool) {
     if (e == Effect::kSensorLag) continue;  // the twin of extra_lag, told apart afterwards
     if (e == Effect::kLoadDamping && !dominant_mode(pr.tf)) continue;
@@ -65,7 +66,8 @@ std::vector<Candidate> pair_candidates(const std::vector<HypothesisFit>& singles
   for (std::size_t i = 0; i < inputs.size(); ++i) {
     for (std::size_t j = i + 1; j < inputs.size(); ++j) {
       const auto lag = [](Effect e) { return e == Effect::kExtraLag || e == Effect::kSensorLag; };
-      if (lag(inputs[i]->effects[0].effect) && lag(inputs[j]->effects[0].effect)) continue;  // twins
+      if (lag(inputs[i]->effects[0].effect) && lag(inputs[j]->effects[0].effect))
+        continue;  // twins
       out.push_back({{inputs[i]->effects[0], inputs[j]->effects[0]}});
     }
     for (std::size_t j = 0; j < dists.size() && i < 2; ++j)
@@ -75,8 +77,9 @@ std::vector<Candidate> pair_candidates(const std::vector<HypothesisFit>& singles
 }
 
 void rank(std::vector<HypothesisFit>& hs) {
-  std::stable_sort(hs.begin(), hs.end(),
-                   [](const HypothesisFit& a, const HypothesisFit& b) { return a.score > b.score; });
+  std::stable_sort(hs.begin(), hs.end(), [](const HypothesisFit& a, const HypothesisFit& b) {
+    return a.score > b.score;
+  });
 }
 
 // The best hypothesis above min_gain; when the input tests failed, one with an input-side

@@ -11,11 +11,10 @@
 //    validation gain beats min_gain_pct, or `unexplained`.
 #pragma once
 
+#include <Eigen/Core>
 #include <optional>
 #include <string>
 #include <vector>
-
-#include <Eigen/Core>
 
 #include "rig/diagnose/augmented_model.hpp"
 #include "rig/diagnose/hypothesis_fit.hpp"
@@ -25,27 +24,27 @@ namespace rig::diagnose {
 
 struct DiagnoseInput {
   ident::TransferFunction model;
-  Eigen::VectorXd u, y;                 // recorded input and output (any offset)
+  Eigen::VectorXd u, y;  // recorded input and output (any offset)
   double dt_s = 0.01;
-  std::optional<double> output_rc_s;    // the output went through this AC coupling
+  std::optional<double> output_rc_s;  // the output went through this AC coupling
 };
 
 struct DiagnoseOptions {
   FitOptions fit;
-  double min_gain_pct = 0.2;            // validation score (after the penalty) to accept one
+  double min_gain_pct = 0.2;  // validation score (after the penalty) to accept one
   bool try_pairs = true;
   int threads = 2;
-  std::vector<Effect> effects;          // empty: the whole library
+  std::vector<Effect> effects;  // empty: the whole library
 };
 
 struct DiagnoseResult {
-  std::string verdict;                  // an effect word, "none" or "unexplained"
+  std::string verdict;                    // an effect word, "none" or "unexplained"
   std::vector<HypothesisFit> hypotheses;  // ranked by score
   Location location;
   std::string explanation;
-  Problem problem;                      // the data as diagnosed (means removed, split)
+  Problem problem;  // the data as diagnosed (means removed, split)
   Eigen::VectorXd baseline_yhat;
-  double fit_before_pct = 0.0;          // whole record after the warm-up
+  double fit_before_pct = 0.0;  // whole record after the warm-up
   double validation_fit_before_pct = 0.0;
   int blocks = 0;
   Eigen::Index warmup = 0;

@@ -1,10 +1,10 @@
 // The explanation a commissioning engineer reads: where the mismatch is, what the chosen
 // effect means physically, and what adding it does to the validation fit, with numbers.
+#include <fmt/format.h>
+
 #include <cmath>
 #include <numbers>
 #include <string>
-
-#include <fmt/format.h>
 
 #include "rig/diagnose/diagnose.hpp"
 
@@ -36,15 +36,18 @@ std::string where_in_time_and_level(const DiagnoseResult& r) {
                      static_cast<double>(from) * pr.dt_s, static_cast<double>(to) * pr.dt_s);
   const auto& a = r.location.amp;
   if (a.amplitude_dependent && a.by_level.size() >= 2)
-    s += fmt::format("The gain the recording shows relative to the model is {:.2f} for the smallest "
-                     "and {:.2f} for the largest fifth of input levels, so the cause is nonlinear. ",
-                     a.by_level.front().gain, a.by_level.back().gain);
+    s += fmt::format(
+        "The gain the recording shows relative to the model is {:.2f} for the smallest "
+        "and {:.2f} for the largest fifth of input levels, so the cause is nonlinear. ",
+        a.by_level.front().gain, a.by_level.back().gain);
   if (a.sign_dependent)
     s += fmt::format("It differs between positive ({:.2f}) and negative ({:.2f}) excursions. ",
                      a.positive.gain, a.negative.gain);
   if (a.direction_dependent)
-    s += fmt::format("Each reversal of the input's direction shifts the output as {:.3g} input units "
-                     "would (play or friction). ", -a.rising.gain);
+    s += fmt::format(
+        "Each reversal of the input's direction shifts the output as {:.3g} input units "
+        "would (play or friction). ",
+        -a.rising.gain);
   return s;
 }
 
@@ -59,55 +62,76 @@ std::string what_effect_means(const AppliedEffect& e, const HypothesisFit& h, co
   const double su = pr.scales.u_std;
   switch (e.effect) {
     case Effect::kDeadTime:
-      return p[0] >= 0 ? fmt::format("a dead time of {:.0f} ms is missing (the recording's is {:.0f} ms, the model's {:.0f} ms)",
-                                     1e3 * p[0], 1e3 * (pr.tf.delay_s + p[0]), 1e3 * pr.tf.delay_s)
+      return p[0] >= 0 ? fmt::format(
+                             "a dead time of {:.0f} ms is missing (the recording's is {:.0f} ms, "
+                             "the model's {:.0f} ms)",
+                             1e3 * p[0], 1e3 * (pr.tf.delay_s + p[0]), 1e3 * pr.tf.delay_s)
                        : fmt::format("the model's dead time is {:.0f} ms too long", -1e3 * p[0]);
     case Effect::kExtraLag:
-      return fmt::format("a first-order lag of {:.0f} ms (corner {:.2f} Hz) is missing in the plant",
-                         1e3 * p[0], 1.0 / (2.0 * std::numbers::pi * p[0]));
+      return fmt::format(
+          "a first-order lag of {:.0f} ms (corner {:.2f} Hz) is missing in the plant", 1e3 * p[0],
+          1.0 / (2.0 * std::numbers::pi * p[0]));
     case Effect::kSensorLag:
-      return fmt::format("the measurement lags by {:.0f} ms more than modelled; the noise is filtered "
-                         "too (noise above the corner is {:.2f} of that below), so it is the transducer",
-                         1e3 * p[0], derived(h, "noise_rolloff_ratio"));
+      return fmt::format(
+          "the measurement lags by {:.0f} ms more than modelled; the noise is filtered "
+          "too (noise above the corner is {:.2f} of that below), so it is the transducer",
+          1e3 * p[0], derived(h, "noise_rolloff_ratio"));
     case Effect::kResonance:
-      return fmt::format("an unmodelled resonance at {:.2f} Hz (damping ratio {:.3f}, gain x{:.2f} at its peak)",
-                         p[0], p[1], p[2]);
+      return fmt::format(
+          "an unmodelled resonance at {:.2f} Hz (damping ratio {:.3f}, gain x{:.2f} at its peak)",
+          p[0], p[1], p[2]);
     case Effect::kAcCoupling:
-      return fmt::format("the output passed through an AC coupling with RC = {:.2f} s (corner {:.3f} Hz) "
-                         "that the model lacks", p[0], 1.0 / (2.0 * std::numbers::pi * p[0]));
+      return fmt::format(
+          "the output passed through an AC coupling with RC = {:.2f} s (corner {:.3f} Hz) "
+          "that the model lacks",
+          p[0], 1.0 / (2.0 * std::numbers::pi * p[0]));
     case Effect::kDeadband:
-      return fmt::format("inputs within +-{:.3g} of the operating point ({:.0f} % of the input's standard "
-                         "deviation) have no effect: a deadband", p[0], 100.0 * p[0] / su);
+      return fmt::format(
+          "inputs within +-{:.3g} of the operating point ({:.0f} % of the input's standard "
+          "deviation) have no effect: a deadband",
+          p[0], 100.0 * p[0] / su);
     case Effect::kBacklash:
-      return fmt::format("a reversal of the input is lost for {:.3g} ({:.0f} % of the input's standard "
-                         "deviation): backlash of total width {:.3g}", 2 * p[0], 200.0 * p[0] / su, 2 * p[0]);
+      return fmt::format(
+          "a reversal of the input is lost for {:.3g} ({:.0f} % of the input's standard "
+          "deviation): backlash of total width {:.3g}",
+          2 * p[0], 200.0 * p[0] / su, 2 * p[0]);
     case Effect::kSaturation:
-      return fmt::format("the input is limited at +{:.3g} / -{:.3g} about the operating point "
-                         "({:.1f} / {:.1f} standard deviations)", p[0], p[1], p[0] / su, p[1] / su);
+      return fmt::format(
+          "the input is limited at +{:.3g} / -{:.3g} about the operating point "
+          "({:.1f} / {:.1f} standard deviations)",
+          p[0], p[1], p[0] / su, p[1] / su);
     case Effect::kRateLimit:
       return fmt::format("the input cannot change faster than {:.3g} per second", p[0]);
     case Effect::kStaticNonlinearity:
-      return fmt::format("the static gain changes with level: at +1 standard deviation it is {:.2f}, at -1 "
-                         "it is {:.2f} times the small-signal gain", 1 + p[0] + p[1], 1 - p[0] + p[1]);
+      return fmt::format(
+          "the static gain changes with level: at +1 standard deviation it is {:.2f}, at -1 "
+          "it is {:.2f} times the small-signal gain",
+          1 + p[0] + p[1], 1 - p[0] + p[1]);
     case Effect::kNonlinearStiffness:
-      return fmt::format("the stiffness changes with amplitude: {:+.0f} % at one standard deviation of the output",
-                         100.0 * p[0]);
+      return fmt::format(
+          "the stiffness changes with amplitude: {:+.0f} % at one standard deviation of the output",
+          100.0 * p[0]);
     case Effect::kCoulombFriction:
-      return fmt::format("a friction force of {:.3g} (in input units, {:.0f} % of the input's standard "
-                         "deviation) opposes every motion", p[0], 100.0 * p[0] / su);
+      return fmt::format(
+          "a friction force of {:.3g} (in input units, {:.0f} % of the input's standard "
+          "deviation) opposes every motion",
+          p[0], 100.0 * p[0] / su);
     case Effect::kLoadDamping: {
       const auto m = dominant_mode(pr.tf);
-      return fmt::format("the mode at {:.2f} Hz is damped with a ratio of {:.3f}, not the model's {:.3f}",
-                         m ? m->first : 0.0, p[0], m ? m->second : 0.0);
+      return fmt::format(
+          "the mode at {:.2f} Hz is damped with a ratio of {:.3f}, not the model's {:.3f}",
+          m ? m->first : 0.0, p[0], m ? m->second : 0.0);
     }
     case Effect::kGainChange:
-      return fmt::format("the gain is {:.3f} times the model's ({:+.1f} %)", p[0], 100.0 * (p[0] - 1.0));
+      return fmt::format("the gain is {:.3f} times the model's ({:+.1f} %)", p[0],
+                         100.0 * (p[0] - 1.0));
     case Effect::kPeriodicDisturbance:
-      return fmt::format("a periodic disturbance at {:.3f} Hz of amplitude {:.3g}, not caused by the input",
-                         p[0], derived(h, "amplitude"));
+      return fmt::format(
+          "a periodic disturbance at {:.3f} Hz of amplitude {:.3g}, not caused by the input", p[0],
+          derived(h, "amplitude"));
     case Effect::kDrift:
-      return fmt::format("a slow drift (time scale {:.0f} s, rms {:.3g}) not caused by the input", p[0],
-                         derived(h, "drift_rms"));
+      return fmt::format("a slow drift (time scale {:.0f} s, rms {:.3g}) not caused by the input",
+                         p[0], derived(h, "drift_rms"));
   }
   return "";
 }
@@ -120,13 +144,16 @@ std::string explain(const DiagnoseResult& r) {
     return fmt::format(
         "The model explains the recording within noise: fit {:.1f} % (validation {:.1f} %); the "
         "residual is independent of the input (largest cross-correlation {:.2f} of the 99 % bound, "
-        "threshold {:.2f}), no frequency band disagrees beyond the H1 uncertainty and the gain does "
+        "threshold {:.2f}), no frequency band disagrees beyond the H1 uncertainty and the gain "
+        "does "
         "not depend on amplitude.",
         r.fit_before_pct, r.validation_fit_before_pct, t.cross_ratio, t.cross_threshold);
   std::string s = where_in_frequency(r.location) + where_in_time_and_level(r);
   if (!t.independent)
-    s += fmt::format("The residual is correlated with the input (peak {:.1f} times the 99 % bound at a lag "
-                     "of {:.2f} s): dynamics are missing. ", t.cross_ratio, t.cross_peak_lag_s);
+    s += fmt::format(
+        "The residual is correlated with the input (peak {:.1f} times the 99 % bound at a lag "
+        "of {:.2f} s): dynamics are missing. ",
+        t.cross_ratio, t.cross_peak_lag_s);
   const HypothesisFit* h = r.chosen();
   if (!h) {
     s += "No effect of the library explains it: the best";
@@ -143,9 +170,10 @@ std::string explain(const DiagnoseResult& r) {
     if (!what.empty()) what += "; together with that, ";
     what += what_effect_means(e, *h, r.problem);
   }
-  s += fmt::format("Diagnosis: {}. Adding it raises the validation fit from {:.1f} % to {:.1f} % "
-                   "(estimation {:.1f} % to {:.1f} %).",
-                   what, h->validation_fit_before, h->validation_fit_after, h->fit_before, h->fit_after);
+  s += fmt::format(
+      "Diagnosis: {}. Adding it raises the validation fit from {:.1f} % to {:.1f} % "
+      "(estimation {:.1f} % to {:.1f} %).",
+      what, h->validation_fit_before, h->validation_fit_after, h->fit_before, h->fit_after);
   return s;
 }
 

@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
-
 #include <unsupported/Eigen/NonLinearOptimization>
 #include <unsupported/Eigen/NumericalDiff>
 
@@ -54,7 +53,7 @@ struct Residual {
   const Problem* problem;
   const Layout* layout;
   std::vector<Eigen::Index> rows;  // estimation samples
-  int* calls = nullptr;  // shared by the copies NumericalDiff makes
+  int* calls = nullptr;            // shared by the copies NumericalDiff makes
 
   int inputs() const { return layout->size; }
   int values() const { return static_cast<int>(rows.size()); }
@@ -92,7 +91,8 @@ int HypothesisFit::parameter_count() const {
   return n;
 }
 
-HypothesisFit fit_hypothesis(const Problem& pr, const std::vector<std::vector<AppliedEffect>>& starts,
+HypothesisFit fit_hypothesis(const Problem& pr,
+                             const std::vector<std::vector<AppliedEffect>>& starts,
                              const Eigen::VectorXd& baseline_yhat, const FitOptions& options) {
   Layout layout;
   for (const auto& e : starts.front()) {

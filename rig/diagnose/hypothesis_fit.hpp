@@ -10,11 +10,10 @@
 // Score = validation fit gain - penalty_pct_per_parameter * parameters (percentage points).
 #pragma once
 
+#include <Eigen/Core>
 #include <string>
 #include <utility>
 #include <vector>
-
-#include <Eigen/Core>
 
 #include "rig/diagnose/augmented_model.hpp"
 

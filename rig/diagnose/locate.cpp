@@ -9,12 +9,13 @@
 // variance and 30 times what white noise would leave (dt / tau_d), and is not the smoothed
 // model output's shadow (|corr| < 0.7; a missing low-frequency dynamic would be near 1,
 // while two independent slow records of T/tau_d effective samples correlate by chance).
+#include "rig/diagnose/locate.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <numbers>
 
 #include "rig/diagnose/blocks.hpp"
-#include "rig/diagnose/locate.hpp"
 
 namespace rig::diagnose {
 namespace {
@@ -37,8 +38,10 @@ void find_line(const Problem& pr, const Eigen::VectorXd& r, const FrequencyLocat
     for (int j = std::max(0, k - 8); j <= std::min(nb - 1, k + 8); ++j)
       if (std::abs(j - k) > 1) nbr.push_back(b[static_cast<std::size_t>(j)].residual_psd);
     std::nth_element(nbr.begin(), nbr.begin() + static_cast<long>(nbr.size() / 2), nbr.end());
-    const double ratio = b[static_cast<std::size_t>(k)].residual_psd / std::max(nbr[nbr.size() / 2], 1e-300);
-    if (ratio > d.line_ratio) d.line_ratio = ratio, d.line_freq_hz = b[static_cast<std::size_t>(k)].freq_hz;
+    const double ratio =
+        b[static_cast<std::size_t>(k)].residual_psd / std::max(nbr[nbr.size() / 2], 1e-300);
+    if (ratio > d.line_ratio)
+      d.line_ratio = ratio, d.line_freq_hz = b[static_cast<std::size_t>(k)].freq_hz;
   }
   d.periodic = d.line_ratio > 12.0;
   if (!d.periodic || nb < 2) return;

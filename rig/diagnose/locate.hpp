@@ -3,12 +3,11 @@
 // The residual is r = y - yhat with yhat the baseline model's output (plus offset).
 #pragma once
 
+#include <Eigen/Core>
 #include <complex>
 #include <optional>
 #include <utility>
 #include <vector>
-
-#include <Eigen/Core>
 
 #include "rig/diagnose/augmented_model.hpp"
 
@@ -16,9 +15,9 @@ namespace rig::diagnose {
 
 struct FrequencyBin {
   double freq_hz = 0.0;
-  std::complex<double> measured;  // H1 = G_yu / G_uu
-  std::complex<double> model;     // the baseline (with the recording's coupling)
-  double coherence = 0.0;         // of (u, y)
+  std::complex<double> measured;    // H1 = G_yu / G_uu
+  std::complex<double> model;       // the baseline (with the recording's coupling)
+  double coherence = 0.0;           // of (u, y)
   double residual_coherence = 0.0;  // of (u, r): the part of r explained linearly by u
   double residual_psd = 0.0;        // of r, per Hz
   bool significant = false;         // residual coherence beyond its null threshold
@@ -29,12 +28,12 @@ struct FrequencyLocation {
   int segments = 0;
   double coherence_threshold = 1.0;  // null-hypothesis threshold of residual coherence
   std::optional<std::pair<double, double>> band_hz;
-  double input_band_hz = 0.0;        // highest frequency with input power >= 1 % of its peak
+  double input_band_hz = 0.0;  // highest frequency with input power >= 1 % of its peak
   // Seeds for the hypotheses, from H1 / G over coherent bins:
-  double delay_from_phase_s = 0.0;   // phase error slope: -360 f tau
-  double lag_from_phase_s = 0.0;     // phase error -atan(2 pi f T)
-  double gain_ratio = 1.0;           // median |H1 / G|
-  double peak_ratio_freq_hz = 0.0;   // where | ln |H1 / G| | is largest
+  double delay_from_phase_s = 0.0;  // phase error slope: -360 f tau
+  double lag_from_phase_s = 0.0;    // phase error -atan(2 pi f T)
+  double gain_ratio = 1.0;          // median |H1 / G|
+  double peak_ratio_freq_hz = 0.0;  // where | ln |H1 / G| | is largest
   double peak_ratio = 1.0;
 };
 
@@ -44,47 +43,47 @@ struct TimeWindow {
 };
 
 struct LevelBin {
-  double level = 0.0;      // rms of |u| in the band (input units)
-  double gain = 1.0;       // gain the band sees relative to the model, 1 + beta_i
+  double level = 0.0;  // rms of |u| in the band (input units)
+  double gain = 1.0;   // gain the band sees relative to the model, 1 + beta_i
   double gain_std = 0.0;
 };
 
 struct AmplitudeLocation {
-  std::vector<LevelBin> by_level;   // quantile bands of |u|
-  LevelBin positive, negative;      // u >= 0 / u < 0
-  LevelBin rising, falling;         // gain field: +-coefficient of G sign(du/dt)
+  std::vector<LevelBin> by_level;  // quantile bands of |u|
+  LevelBin positive, negative;     // u >= 0 / u < 0
+  LevelBin rising, falling;        // gain field: +-coefficient of G sign(du/dt)
   double level_chi2 = 0.0, sign_z = 0.0, direction_z = 0.0;
   bool amplitude_dependent = false, sign_dependent = false, direction_dependent = false;
 };
 
 struct ResidualTests {
-  Eigen::VectorXd lags_s;           // 0..M (auto) and -M..M (cross) share dt
-  Eigen::VectorXd auto_corr;        // rho_rr(k), k = 0..M
-  Eigen::VectorXd cross_corr;       // rho_ru(k), k = -M..M
-  Eigen::VectorXd cross_bound;      // 99 % bound per lag (Ljung 16.60)
-  double auto_bound = 0.0;          // 2.58 / sqrt(N)
-  double whiteness_ratio = 0.0;     // max |rho_rr(k>0)| / bound
-  double cross_ratio = 0.0;         // max |rho_ru(k)| / bound_k
+  Eigen::VectorXd lags_s;        // 0..M (auto) and -M..M (cross) share dt
+  Eigen::VectorXd auto_corr;     // rho_rr(k), k = 0..M
+  Eigen::VectorXd cross_corr;    // rho_ru(k), k = -M..M
+  Eigen::VectorXd cross_bound;   // 99 % bound per lag (Ljung 16.60)
+  double auto_bound = 0.0;       // 2.58 / sqrt(N)
+  double whiteness_ratio = 0.0;  // max |rho_rr(k>0)| / bound
+  double cross_ratio = 0.0;      // max |rho_ru(k)| / bound_k
   double cross_peak_lag_s = 0.0;
-  double cross_threshold = 0.0;     // family-wise (over lags) ratio threshold
+  double cross_threshold = 0.0;  // family-wise (over lags) ratio threshold
   bool white = true, independent = true;
 };
 
 struct Disturbances {
   double line_freq_hz = 0.0, line_ratio = 0.0;  // strongest residual spectral line
   bool periodic = false;
-  double drift_ratio = 0.0;                     // var(smoothed r) / var(r)
+  double drift_ratio = 0.0;  // var(smoothed r) / var(r)
   double drift_tau_s = 0.0;
   bool drift = false;
 };
 
 struct Location {
   FrequencyLocation freq;
-  std::vector<TimeWindow> windows;   // where the residual leaves its noise bounds
+  std::vector<TimeWindow> windows;  // where the residual leaves its noise bounds
   AmplitudeLocation amp;
   ResidualTests tests;
   Disturbances dist;
-  bool input_mismatch = false;       // frequency, cross-correlation or amplitude test failed
+  bool input_mismatch = false;  // frequency, cross-correlation or amplitude test failed
   bool disturbance = false;
 };
 
@@ -92,8 +91,8 @@ FrequencyLocation locate_frequency(const Problem& pr, const Eigen::VectorXd& res
 std::vector<TimeWindow> locate_time(const Problem& pr, const Eigen::VectorXd& residual);
 AmplitudeLocation locate_amplitude(const Problem& pr, const Eigen::VectorXd& residual,
                                    const Eigen::VectorXd& yhat);
-ResidualTests residual_tests(const Eigen::VectorXd& residual, const Eigen::VectorXd& u,
-                             double dt_s, Eigen::Index max_lag);
+ResidualTests residual_tests(const Eigen::VectorXd& residual, const Eigen::VectorXd& u, double dt_s,
+                             Eigen::Index max_lag);
 Disturbances locate_disturbances(const Problem& pr, const Eigen::VectorXd& residual,
                                  const FrequencyLocation& freq);
 Location locate(const Problem& pr, const Eigen::VectorXd& baseline_yhat);

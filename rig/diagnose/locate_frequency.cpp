@@ -83,7 +83,8 @@ FrequencyLocation locate_frequency(const Problem& pr, const Eigen::VectorXd& r) 
     b.freq_hz = sy.freq_hz(k);
     b.model = model_response(pr, b.freq_hz);
     b.measured = sy.guu(k) > 0.0 ? sy.gyu(k) / sy.guu(k) : 0.0;
-    b.coherence = sy.guu(k) * sy.gyy(k) > 0.0 ? std::norm(sy.gyu(k)) / (sy.guu(k) * sy.gyy(k)) : 0.0;
+    b.coherence =
+        sy.guu(k) * sy.gyy(k) > 0.0 ? std::norm(sy.gyu(k)) / (sy.guu(k) * sy.gyy(k)) : 0.0;
     b.residual_coherence =
         sr.guu(k) * sr.gyy(k) > 0.0 ? std::norm(sr.gyu(k)) / (sr.guu(k) * sr.gyy(k)) : 0.0;
     b.residual_psd = sr.gyy(k) * psd_scale;

@@ -12,13 +12,11 @@
 // compared with chi^2(4) at alpha = 1e-4. Sign: the same with u >= 0 and u < 0 (|z| > 5).
 // Direction: r regressed on [yhat, G sign(du/dt)] (play or friction); |z| > 5. The margins
 // are wide because the Bartlett factor only approximates the regressors' own colour.
+#include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
-#include <numeric>
-
 #include <limits>
-
-#include <Eigen/Dense>
+#include <numeric>
 
 #include "rig/diagnose/blocks.hpp"
 #include "rig/diagnose/locate.hpp"
@@ -47,7 +45,6 @@ double bartlett_factor(const Eigen::VectorXd& a, const Eigen::VectorXd& b, Eigen
   }
   return std::max(c, 1.0);
 }
-
 
 }  // namespace
 
@@ -149,12 +146,15 @@ AmplitudeLocation locate_amplitude(const Problem& pr, const Eigen::VectorXd& r_a
   std::vector<double> level_ss(nb, 0.0), level_n(nb, 0.0);
   for (int b = 0; b < nb; ++b) {
     Eigen::VectorXd ub = Eigen::VectorXd::Zero(n);
-    const double lo = b == 0 ? -1.0 : edges[static_cast<std::size_t>(b - 1)], hi = edges[static_cast<std::size_t>(b)];
+    const double lo = b == 0 ? -1.0 : edges[static_cast<std::size_t>(b - 1)],
+                 hi = edges[static_cast<std::size_t>(b)];
     for (Eigen::Index k = 0; k < n; ++k) {
       const double au = std::abs(pr.u(k));
       if (au > lo && au <= hi) {
         ub(k) = pr.u(k);
-        if (k >= from) level_ss[static_cast<std::size_t>(b)] += au * au, level_n[static_cast<std::size_t>(b)] += 1.0;
+        if (k >= from)
+          level_ss[static_cast<std::size_t>(b)] += au * au,
+              level_n[static_cast<std::size_t>(b)] += 1.0;
       }
     }
     xl.col(b) = masked_response(pr, ub).tail(m);
@@ -164,7 +164,8 @@ AmplitudeLocation locate_amplitude(const Problem& pr, const Eigen::VectorXd& r_a
   const double s2 = full.rss / std::max(1.0, n_eff - nb);
   for (int b = 0; b < nb; ++b) {
     LevelBin bin;
-    bin.level = std::sqrt(level_ss[static_cast<std::size_t>(b)] / std::max(1.0, level_n[static_cast<std::size_t>(b)]));
+    bin.level = std::sqrt(level_ss[static_cast<std::size_t>(b)] /
+                          std::max(1.0, level_n[static_cast<std::size_t>(b)]));
     bin.gain = 1.0 + full.beta(b);
     bin.gain_std = std::sqrt(std::max(0.0, s2 * c * full.inv(b, b)) / c);
     a.by_level.push_back(bin);
@@ -176,14 +177,17 @@ AmplitudeLocation locate_amplitude(const Problem& pr, const Eigen::VectorXd& r_a
   xs.col(1) = masked_response(pr, pr.u.cwiseMin(0.0)).tail(m);
   const Ls sign = least_squares(xs, r);
   const double s2s = sign.rss / std::max(1.0, n_eff - 2);
-  a.positive = {std::sqrt(pr.u.cwiseMax(0.0).squaredNorm() / static_cast<double>(n)), 1 + sign.beta(0), std::sqrt(s2s * sign.inv(0, 0))};
-  a.negative = {std::sqrt(pr.u.cwiseMin(0.0).squaredNorm() / static_cast<double>(n)), 1 + sign.beta(1), std::sqrt(s2s * sign.inv(1, 1))};
+  a.positive = {std::sqrt(pr.u.cwiseMax(0.0).squaredNorm() / static_cast<double>(n)),
+                1 + sign.beta(0), std::sqrt(s2s * sign.inv(0, 0))};
+  a.negative = {std::sqrt(pr.u.cwiseMin(0.0).squaredNorm() / static_cast<double>(n)),
+                1 + sign.beta(1), std::sqrt(s2s * sign.inv(1, 1))};
   // The two gains are strongly (negatively) correlated: the contrast's own variance.
   const double var_diff = s2s * (sign.inv(0, 0) + sign.inv(1, 1) - 2.0 * sign.inv(0, 1));
   a.sign_z = var_diff > 0.0 ? (sign.beta(0) - sign.beta(1)) / std::sqrt(var_diff) : 0.0;
   // Direction: play or friction adds -b sign(du/dt) before the plant: regressor G(sign(du)).
   Eigen::VectorXd sdu = Eigen::VectorXd::Zero(n);
-  for (Eigen::Index k = 1; k < n; ++k) sdu(k) = pr.u(k) > pr.u(k - 1) ? 1.0 : (pr.u(k) < pr.u(k - 1) ? -1.0 : 0.0);
+  for (Eigen::Index k = 1; k < n; ++k)
+    sdu(k) = pr.u(k) > pr.u(k - 1) ? 1.0 : (pr.u(k) < pr.u(k - 1) ? -1.0 : 0.0);
   Eigen::MatrixXd xd(m, 2);
   xd.col(0) = yh;
   xd.col(1) = masked_response(pr, sdu).tail(m);

@@ -11,7 +11,8 @@ struct ChangePoint {
   bool found = false;
 };
 
-ChangePoint change_point(const Problem& pr, const Eigen::VectorXd& base, const Eigen::VectorXd& aug) {
+ChangePoint change_point(const Problem& pr, const Eigen::VectorXd& base,
+                         const Eigen::VectorXd& aug) {
   const Eigen::Index n = pr.y.size();
   Eigen::Index start = 0;
   while (start < n && pr.est_weight(start) + pr.val_weight(start) <= 0.0) ++start;
@@ -30,7 +31,8 @@ ChangePoint change_point(const Problem& pr, const Eigen::VectorXd& base, const E
     double m1 = 0, m2 = 0, v = 0;
     for (int i = 0; i < nw; ++i) (i < k ? m1 : m2) += gain[static_cast<std::size_t>(i)];
     m1 /= k, m2 /= nw - k;
-    for (int i = 0; i < nw; ++i) v += std::pow(gain[static_cast<std::size_t>(i)] - (i < k ? m1 : m2), 2);
+    for (int i = 0; i < nw; ++i)
+      v += std::pow(gain[static_cast<std::size_t>(i)] - (i < k ? m1 : m2), 2);
     const double se = std::sqrt(v / (nw - 2) * (1.0 / k + 1.0 / (nw - k)));
     const double t = se > 0 ? (m2 - m1) / se : 0.0;
     const bool onset = t > 0;

@@ -1,9 +1,9 @@
 // report.html of `rig diagnose`: verdict and explanation first, then the plots a person
 // would look at to check it.
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <cmath>
-
-#include <fmt/format.h>
 
 #include "rig/diagnose/report_out.hpp"
 #include "rig/fra/h1.hpp"
@@ -26,12 +26,21 @@ Chart time_chart(const DiagnoseResult& r) {
   Eigen::Index from = std::max(pr.active_from, r.warmup);
   while (from < n - len && pr.val_weight(from) <= 0.0) ++from;
   from = std::min(from, n - len);
-  Chart c{"Recorded vs simulated (a validation stretch)", "time (s)", "output (mean removed)", {}, {}, {}, false, false, 320};
+  Chart c{"Recorded vs simulated (a validation stretch)",
+          "time (s)",
+          "output (mean removed)",
+          {},
+          {},
+          {},
+          false,
+          false,
+          320};
   for (Eigen::Index k = 0; k < len; ++k) c.x.push_back(static_cast<double>(from + k) * pr.dt_s);
   c.series.push_back({"recorded", seg(pr.y, from, len), "#444", false, false, 1.0});
   c.series.push_back({"model", seg(r.baseline_yhat, from, len), "#d62728", false, false, 1.5});
   if (const HypothesisFit* h = r.chosen(); h && h->yhat.size() == n)
-    c.series.push_back({"augmented (" + h->name() + ")", seg(h->yhat, from, len), "#2ca02c", false, false, 1.5});
+    c.series.push_back(
+        {"augmented (" + h->name() + ")", seg(h->yhat, from, len), "#2ca02c", false, false, 1.5});
   return c;
 }
 
@@ -43,8 +52,24 @@ std::pair<Chart, Chart> spectrum_charts(const DiagnoseResult& r) {
   const HypothesisFit* h = r.chosen();
   const bool after = h && h->yhat.size() == pr.y.size();
   const auto sa = after ? fra::welch_cross_spectra(pr.u, pr.y - h->yhat, pr.dt_s, wo) : before;
-  Chart psd{"Residual spectrum (located band highlighted)", "frequency (Hz)", "PSD (arbitrary scale)", {}, {}, {}, true, true, 320};
-  Chart coh{"Residual coherence with the input", "frequency (Hz)", "coherence", {}, {}, {}, true, false, 260};
+  Chart psd{"Residual spectrum (located band highlighted)",
+            "frequency (Hz)",
+            "PSD (arbitrary scale)",
+            {},
+            {},
+            {},
+            true,
+            true,
+            320};
+  Chart coh{"Residual coherence with the input",
+            "frequency (Hz)",
+            "coherence",
+            {},
+            {},
+            {},
+            true,
+            false,
+            260};
   Series b{"residual, model", {}, "#d62728"}, a{"residual, augmented", {}, "#2ca02c"},
       band{"located band", {}, "#ff7f0e", false, true, 2.0};
   Series rc{"residual coherence", {}, "#1f77b4"}, th{"null threshold", {}, "#888", true};
@@ -53,10 +78,13 @@ std::pair<Chart, Chart> spectrum_charts(const DiagnoseResult& r) {
     psd.x.push_back(before.freq_hz(k));
     b.y.push_back(before.gyy(k));
     a.y.push_back(sa.gyy(k));
-    const bool in = static_cast<std::size_t>(k - 1) < bins.size() && bins[static_cast<std::size_t>(k - 1)].significant;
+    const bool in = static_cast<std::size_t>(k - 1) < bins.size() &&
+                    bins[static_cast<std::size_t>(k - 1)].significant;
     band.y.push_back(in ? before.gyy(k) : NAN);
     coh.x.push_back(before.freq_hz(k));
-    rc.y.push_back(static_cast<std::size_t>(k - 1) < bins.size() ? bins[static_cast<std::size_t>(k - 1)].residual_coherence : NAN);
+    rc.y.push_back(static_cast<std::size_t>(k - 1) < bins.size()
+                       ? bins[static_cast<std::size_t>(k - 1)].residual_coherence
+                       : NAN);
     th.y.push_back(r.location.freq.coherence_threshold);
   }
   psd.series = {b, band};
@@ -66,8 +94,17 @@ std::pair<Chart, Chart> spectrum_charts(const DiagnoseResult& r) {
 }
 
 Chart amplitude_chart(const DiagnoseResult& r) {
-  Chart c{"Gain each input level sees (recording / model)", "input level (rms of |u| in the band)", "relative gain", {}, {}, {}, false, false, 260};
-  Series g{"local gain", {}, "#1f77b4", false, true, 2.0}, hi{"+1 std", {}, "#9ecae1", true}, lo{"-1 std", {}, "#9ecae1", true};
+  Chart c{"Gain each input level sees (recording / model)",
+          "input level (rms of |u| in the band)",
+          "relative gain",
+          {},
+          {},
+          {},
+          false,
+          false,
+          260};
+  Series g{"local gain", {}, "#1f77b4", false, true, 2.0}, hi{"+1 std", {}, "#9ecae1", true},
+      lo{"-1 std", {}, "#9ecae1", true};
   for (const auto& b : r.location.amp.by_level) {
     c.x.push_back(b.level);
     g.y.push_back(b.gain), hi.y.push_back(b.gain + b.gain_std), lo.y.push_back(b.gain - b.gain_std);
@@ -79,11 +116,21 @@ Chart amplitude_chart(const DiagnoseResult& r) {
 
 Chart cross_chart(const DiagnoseResult& r) {
   const auto& t = r.location.tests;
-  Chart c{"Residual-input cross-correlation (resid)", "lag (s)", "correlation", {}, {}, {}, false, false, 260};
-  Series x{"r_ru", {}, "#1f77b4"}, up{"99 % bound", {}, "#888", true}, dn{"-99 % bound", {}, "#888", true};
+  Chart c{"Residual-input cross-correlation (resid)",
+          "lag (s)",
+          "correlation",
+          {},
+          {},
+          {},
+          false,
+          false,
+          260};
+  Series x{"r_ru", {}, "#1f77b4"}, up{"99 % bound", {}, "#888", true},
+      dn{"-99 % bound", {}, "#888", true};
   for (Eigen::Index k = 0; k < t.cross_corr.size(); ++k) {
     c.x.push_back(t.lags_s(k));
-    x.y.push_back(t.cross_corr(k)), up.y.push_back(t.cross_bound(k)), dn.y.push_back(-t.cross_bound(k));
+    x.y.push_back(t.cross_corr(k)), up.y.push_back(t.cross_bound(k)),
+        dn.y.push_back(-t.cross_bound(k));
   }
   c.series = {x, up, dn};
   return c;
@@ -110,18 +157,22 @@ void bode_section(report::HtmlReport& page, const DiagnoseResult& r) {
 
 report::Table hypotheses_table(const DiagnoseResult& r) {
   report::Table t{{"rank", "effect", "parameters", "fit before (%)", "fit after (%)",
-                   "validation before (%)", "validation after (%)", "score"}, {}, {}};
+                   "validation before (%)", "validation after (%)", "score"},
+                  {},
+                  {}};
   for (std::size_t i = 0; i < r.hypotheses.size(); ++i) {
     const auto& h = r.hypotheses[i];
     std::string params;
     for (const auto& e : h.effects) {
       const auto specs = parameter_specs(e.effect, r.problem.scales);
       for (std::size_t j = 0; j < e.params.size(); ++j)
-        params += fmt::format("{}{}={:.4g}", params.empty() ? "" : ", ", specs[j].name, e.params[j]);
+        params +=
+            fmt::format("{}{}={:.4g}", params.empty() ? "" : ", ", specs[j].name, e.params[j]);
     }
-    t.rows.push_back({std::to_string(i + 1), h.name(), params, fmt::format("{:.1f}", h.fit_before),
-                      fmt::format("{:.1f}", h.fit_after), fmt::format("{:.1f}", h.validation_fit_before),
-                      fmt::format("{:.1f}", h.validation_fit_after), fmt::format("{:+.2f}", h.score)});
+    t.rows.push_back(
+        {std::to_string(i + 1), h.name(), params, fmt::format("{:.1f}", h.fit_before),
+         fmt::format("{:.1f}", h.fit_after), fmt::format("{:.1f}", h.validation_fit_before),
+         fmt::format("{:.1f}", h.validation_fit_after), fmt::format("{:+.2f}", h.score)});
   }
   if (r.chosen_index >= 0) t.highlight_rows.push_back(static_cast<std::size_t>(r.chosen_index));
   return t;
@@ -129,21 +180,29 @@ report::Table hypotheses_table(const DiagnoseResult& r) {
 
 }  // namespace
 
-void write_report_html(const DiagnoseResult& r, const ReportContext& c, const std::filesystem::path& file) {
+void write_report_html(const DiagnoseResult& r, const ReportContext& c,
+                       const std::filesystem::path& file) {
   report::HtmlReport page("rig diagnose: " + c.recording + " vs " + c.model);
-  const report::Tone tone = r.verdict == "none" ? report::Tone::kOk
-                            : r.verdict == "unexplained" ? report::Tone::kWarning : report::Tone::kInfo;
+  const report::Tone tone = r.verdict == "none"          ? report::Tone::kOk
+                            : r.verdict == "unexplained" ? report::Tone::kWarning
+                                                         : report::Tone::kInfo;
   page.note(tone, "Verdict: " + r.verdict);
   page.paragraph(r.explanation);
   const auto& loc = r.location;
   page.key_values(
       {{"fit before (whole record after warm-up)", fmt::format("{:.1f} %", r.fit_before_pct)},
        {"validation fit before", fmt::format("{:.1f} %", r.validation_fit_before_pct)},
-       {"band", loc.freq.band_hz ? fmt::format("{:.3g} - {:.3g} Hz", loc.freq.band_hz->first, loc.freq.band_hz->second) : "none"},
+       {"band", loc.freq.band_hz ? fmt::format("{:.3g} - {:.3g} Hz", loc.freq.band_hz->first,
+                                               loc.freq.band_hz->second)
+                                 : "none"},
        {"time windows", std::to_string(loc.windows.size())},
-       {"amplitude dependent", loc.amp.amplitude_dependent || loc.amp.sign_dependent || loc.amp.direction_dependent ? "yes" : "no"},
+       {"amplitude dependent",
+        loc.amp.amplitude_dependent || loc.amp.sign_dependent || loc.amp.direction_dependent
+            ? "yes"
+            : "no"},
        {"residual independent of input", loc.tests.independent ? "yes" : "no"},
-       {"split", fmt::format("{} interleaved blocks after {:.1f} s warm-up", r.blocks, static_cast<double>(r.warmup) * r.problem.dt_s)},
+       {"split", fmt::format("{} interleaved blocks after {:.1f} s warm-up", r.blocks,
+                             static_cast<double>(r.warmup) * r.problem.dt_s)},
        {"run time", fmt::format("{:.2f} s", r.elapsed_s)}});
   page.section("Time").chart(time_chart(r));
   auto [psd, coh] = spectrum_charts(r);

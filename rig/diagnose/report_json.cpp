@@ -16,8 +16,8 @@ json hypothesis_json(const HypothesisFit& h, const Problem& pr) {
     json p = json::object();
     for (std::size_t i = 0; i < e.params.size(); ++i) {
       p[specs[i].name] = number_or_null(e.params[i]);
-      params[h.effects.size() > 1 ? std::string(to_string(e.effect)) + "." + specs[i].name : specs[i].name] =
-          number_or_null(e.params[i]);
+      params[h.effects.size() > 1 ? std::string(to_string(e.effect)) + "." + specs[i].name
+                                  : specs[i].name] = number_or_null(e.params[i]);
     }
     effects.push_back({{"effect", to_string(e.effect)}, {"params", p}});
   }
@@ -32,8 +32,9 @@ json hypothesis_json(const HypothesisFit& h, const Problem& pr) {
           {"validation_fit_before", number_or_null(h.validation_fit_before)},
           {"validation_fit_after", number_or_null(h.validation_fit_after)},
           {"score", number_or_null(h.score)},
-          {"active_span_s", {static_cast<double>(h.active_from) * pr.dt_s,
-                             static_cast<double>(h.active_to < 0 ? pr.u.size() : h.active_to) * pr.dt_s}},
+          {"active_span_s",
+           {static_cast<double>(h.active_from) * pr.dt_s,
+            static_cast<double>(h.active_to < 0 ? pr.u.size() : h.active_to) * pr.dt_s}},
           {"parameters", h.parameter_count()},
           {"evaluations", h.evaluations}};
 }
@@ -42,15 +43,18 @@ json location_json(const DiagnoseResult& r) {
   const Location& loc = r.location;
   json windows = json::array();
   for (const auto& w : loc.windows)
-    windows.push_back({{"from_s", w.from_s}, {"to_s", w.to_s}, {"rms_ratio", w.rms_ratio},
+    windows.push_back({{"from_s", w.from_s},
+                       {"to_s", w.to_s},
+                       {"rms_ratio", w.rms_ratio},
                        {"found_by", "residual level"}});
   const HypothesisFit* h = r.chosen();
   const Eigen::Index n = r.problem.u.size();
   if (windows.empty() && h && (h->active_from > 0 || (h->active_to >= 0 && h->active_to < n)))
-    windows.push_back({{"from_s", static_cast<double>(h->active_from) * r.problem.dt_s},
-                       {"to_s", static_cast<double>(h->active_to < 0 ? n : h->active_to) * r.problem.dt_s},
-                       {"rms_ratio", nullptr},
-                       {"found_by", "change point of the fitted effect's gain"}});
+    windows.push_back(
+        {{"from_s", static_cast<double>(h->active_from) * r.problem.dt_s},
+         {"to_s", static_cast<double>(h->active_to < 0 ? n : h->active_to) * r.problem.dt_s},
+         {"rms_ratio", nullptr},
+         {"found_by", "change point of the fitted effect's gain"}});
   json levels = json::array();
   for (const auto& b : loc.amp.by_level)
     levels.push_back({{"level", b.level}, {"gain", b.gain}, {"gain_std", b.gain_std}});
@@ -58,30 +62,34 @@ json location_json(const DiagnoseResult& r) {
                                : json(nullptr);
   return {{"band_hz", band},
           {"time_windows", windows},
-          {"amplitude_dependent", loc.amp.amplitude_dependent || loc.amp.sign_dependent ||
-                                      loc.amp.direction_dependent},
-          {"amplitude", {{"by_level", levels},
-                         {"level_chi2", loc.amp.level_chi2},
-                         {"level_dependent", loc.amp.amplitude_dependent},
-                         {"sign_z", loc.amp.sign_z},
-                         {"sign_dependent", loc.amp.sign_dependent},
-                         {"direction_z", loc.amp.direction_z},
-                         {"direction_dependent", loc.amp.direction_dependent}}},
-          {"residual_tests", {{"whiteness_ratio", loc.tests.whiteness_ratio},
-                              {"white", loc.tests.white},
-                              {"cross_ratio", loc.tests.cross_ratio},
-                              {"cross_threshold", loc.tests.cross_threshold},
-                              {"cross_peak_lag_s", loc.tests.cross_peak_lag_s},
-                              {"independent", loc.tests.independent}}},
-          {"disturbances", {{"periodic", loc.dist.periodic},
-                            {"line_freq_hz", loc.dist.line_freq_hz},
-                            {"line_ratio", loc.dist.line_ratio},
-                            {"drift", loc.dist.drift},
-                            {"drift_ratio", loc.dist.drift_ratio}}},
+          {"amplitude_dependent",
+           loc.amp.amplitude_dependent || loc.amp.sign_dependent || loc.amp.direction_dependent},
+          {"amplitude",
+           {{"by_level", levels},
+            {"level_chi2", loc.amp.level_chi2},
+            {"level_dependent", loc.amp.amplitude_dependent},
+            {"sign_z", loc.amp.sign_z},
+            {"sign_dependent", loc.amp.sign_dependent},
+            {"direction_z", loc.amp.direction_z},
+            {"direction_dependent", loc.amp.direction_dependent}}},
+          {"residual_tests",
+           {{"whiteness_ratio", loc.tests.whiteness_ratio},
+            {"white", loc.tests.white},
+            {"cross_ratio", loc.tests.cross_ratio},
+            {"cross_threshold", loc.tests.cross_threshold},
+            {"cross_peak_lag_s", loc.tests.cross_peak_lag_s},
+            {"independent", loc.tests.independent}}},
+          {"disturbances",
+           {{"periodic", loc.dist.periodic},
+            {"line_freq_hz", loc.dist.line_freq_hz},
+            {"line_ratio", loc.dist.line_ratio},
+            {"drift", loc.dist.drift},
+            {"drift_ratio", loc.dist.drift_ratio}}},
           {"coherence_threshold", loc.freq.coherence_threshold},
           {"input_band_hz", loc.freq.input_band_hz},
-          {"active_span_s", {static_cast<double>(r.problem.active_from) * r.problem.dt_s,
-                             static_cast<double>(r.problem.active_to) * r.problem.dt_s}}};
+          {"active_span_s",
+           {static_cast<double>(r.problem.active_from) * r.problem.dt_s,
+            static_cast<double>(r.problem.active_to) * r.problem.dt_s}}};
 }
 
 }  // namespace
@@ -105,7 +113,8 @@ nlohmann::json report_json(const DiagnoseResult& r, const ReportContext& c) {
           {"dt_s", r.problem.dt_s},
           {"blocks", r.blocks},
           {"warmup_s", static_cast<double>(r.warmup) * r.problem.dt_s},
-          {"output_coupling_rc_s", r.problem.output_rc_s ? json(*r.problem.output_rc_s) : json(nullptr)},
+          {"output_coupling_rc_s",
+           r.problem.output_rc_s ? json(*r.problem.output_rc_s) : json(nullptr)},
           {"elapsed_s", r.elapsed_s},
           {"augmented_model", "augmented_model.json"}};
 }
@@ -121,8 +130,10 @@ io::ModelFile augmented_model(const DiagnoseResult& r, const io::ModelFile& base
       const auto specs = parameter_specs(e.effect, r.problem.scales);
       json p = json::object();
       for (std::size_t i = 0; i < e.params.size(); ++i) p[specs[i].name] = e.params[i];
-      const char* where = kind_of(e.effect) == EffectKind::kInputNonlinearity ? "input, before the tf"
-                          : kind_of(e.effect) == EffectKind::kFeedback ? "output feedback around the tf's rational part"
+      const char* where = kind_of(e.effect) == EffectKind::kInputNonlinearity
+                              ? "input, before the tf"
+                          : kind_of(e.effect) == EffectKind::kFeedback
+                              ? "output feedback around the tf's rational part"
                           : kind_of(e.effect) == EffectKind::kDisturbance ? "added to the output"
                                                                           : "in num/den/delay_s";
       aug.push_back({{"effect", to_string(e.effect)}, {"params", p}, {"acts", where}});

@@ -4,9 +4,8 @@
 #pragma once
 
 #include <filesystem>
-#include <string>
-
 #include <nlohmann/json.hpp>
+#include <string>
 
 #include "rig/diagnose/diagnose.hpp"
 #include "rig/io/model_file.hpp"

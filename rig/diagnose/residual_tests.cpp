@@ -51,7 +51,8 @@ ResidualTests residual_tests(const Eigen::VectorXd& r_in, const Eigen::VectorXd&
   for (Eigen::Index k = 1; k <= m; ++k) p += 2.0 * t.auto_corr(k) * ruu(k);
   const double sn = std::sqrt(static_cast<double>(n));
   t.auto_bound = 2.58 / sn;
-  t.lags_s = Eigen::VectorXd::LinSpaced(2 * m + 1, static_cast<double>(-m), static_cast<double>(m)) * dt_s;
+  t.lags_s =
+      Eigen::VectorXd::LinSpaced(2 * m + 1, static_cast<double>(-m), static_cast<double>(m)) * dt_s;
   t.cross_corr.resize(2 * m + 1);
   t.cross_bound = Eigen::VectorXd::Constant(2 * m + 1, 2.58 * std::sqrt(std::max(p, 1e-6)) / sn);
   for (Eigen::Index k = -m; k <= m; ++k)

@@ -14,31 +14,43 @@ std::vector<std::vector<double>> seeds_for(Effect e, const Problem& pr, const Lo
   const FrequencyLocation& f = loc.freq;
   const double su = s.u_std;
   switch (e) {
-    case Effect::kDeadTime: return {{f.delay_from_phase_s}, {0.5 * f.delay_from_phase_s + 0.01}};
+    case Effect::kDeadTime:
+      return {{f.delay_from_phase_s}, {0.5 * f.delay_from_phase_s + 0.01}};
     case Effect::kExtraLag:
     case Effect::kSensorLag:
       return {{f.lag_from_phase_s > 0.0 ? f.lag_from_phase_s : 0.05}, {5.0 * s.dt_s}};
     case Effect::kResonance: {
       const double fr = f.peak_ratio_freq_hz > 0.0 ? f.peak_ratio_freq_hz : 0.25 * f.input_band_hz;
-      const double band_mid = f.band_hz ? std::sqrt(std::max(f.band_hz->first, 1e-3) * f.band_hz->second) : fr;
+      const double band_mid =
+          f.band_hz ? std::sqrt(std::max(f.band_hz->first, 1e-3) * f.band_hz->second) : fr;
       return {{fr, 0.05, f.peak_ratio}, {band_mid, 0.1, 1.5}};
     }
-    case Effect::kAcCoupling: return {{5.0}, {30.0}};
+    case Effect::kAcCoupling:
+      return {{5.0}, {30.0}};
     case Effect::kDeadband:
-    case Effect::kBacklash: return {{0.1 * su}, {0.4 * su}};
-    case Effect::kSaturation: return {{1.5 * su, 1.5 * su}, {2.5 * su, 2.5 * su}};
-    case Effect::kRateLimit: return {{0.5 * s.u_rate_std}, {1.5 * s.u_rate_std}};
-    case Effect::kStaticNonlinearity: return {{0.0, 0.0}, {0.1, -0.05}};
-    case Effect::kNonlinearStiffness: return {{0.1}, {-0.1}};
-    case Effect::kCoulombFriction: return {{0.05 * su}, {0.2 * su}};
+    case Effect::kBacklash:
+      return {{0.1 * su}, {0.4 * su}};
+    case Effect::kSaturation:
+      return {{1.5 * su, 1.5 * su}, {2.5 * su, 2.5 * su}};
+    case Effect::kRateLimit:
+      return {{0.5 * s.u_rate_std}, {1.5 * s.u_rate_std}};
+    case Effect::kStaticNonlinearity:
+      return {{0.0, 0.0}, {0.1, -0.05}};
+    case Effect::kNonlinearStiffness:
+      return {{0.1}, {-0.1}};
+    case Effect::kCoulombFriction:
+      return {{0.05 * su}, {0.2 * su}};
     case Effect::kLoadDamping: {
       const auto mode = dominant_mode(pr.tf);
       const double z = mode ? mode->second : 0.1;
       return {{z * 0.6}, {z * 1.6}};
     }
-    case Effect::kGainChange: return {{f.gain_ratio}};
-    case Effect::kPeriodicDisturbance: return {{loc.dist.line_freq_hz}};
-    case Effect::kDrift: return {{loc.dist.drift_tau_s}};
+    case Effect::kGainChange:
+      return {{f.gain_ratio}};
+    case Effect::kPeriodicDisturbance:
+      return {{loc.dist.line_freq_hz}};
+    case Effect::kDrift:
+      return {{loc.dist.drift_tau_s}};
   }
   return {};
 }

@@ -1,12 +1,12 @@
 #include "rig/diagnose/split.hpp"
 
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <cmath>
 #include <numbers>
 #include <stdexcept>
 #include <string>
-
-#include <fmt/format.h>
 
 #include "rig/fra/h1.hpp"
 
@@ -26,8 +26,10 @@ void validate(const DiagnoseInput& in) {
   const auto& tf = in.model;
   if (tf.den.size() == 0 || tf.num.size() == 0 || !tf.num.allFinite() || !tf.den.allFinite())
     throw std::invalid_argument("model: empty or non-finite coefficients");
-  if (!tf.is_proper()) throw std::invalid_argument("model: improper (numerator order exceeds denominator order)");
-  if (!tf.is_stable()) throw std::invalid_argument("model: unstable (a pole in the closed right half plane)");
+  if (!tf.is_proper())
+    throw std::invalid_argument("model: improper (numerator order exceeds denominator order)");
+  if (!tf.is_stable())
+    throw std::invalid_argument("model: unstable (a pole in the closed right half plane)");
   if (in.output_rc_s && !(*in.output_rc_s > 0.0))
     throw std::invalid_argument("coupling time constant must be > 0");
 }
@@ -65,7 +67,8 @@ Problem prepare_problem(const DiagnoseInput& in, int* blocks, Eigen::Index* warm
     (b % 2 == 0 ? pr.est_weight : pr.val_weight).segment(from, to - from).setOnes();
   }
   finish_problem(pr);
-  if (!(pr.scales.u_std > 0.0)) throw std::invalid_argument("input is constant: nothing to compare");
+  if (!(pr.scales.u_std > 0.0))
+    throw std::invalid_argument("input is constant: nothing to compare");
   if (!(pr.scales.z_std > 0.0)) throw std::invalid_argument("model output is zero for this input");
   *blocks = nb;
   *warmup = w;
@@ -82,9 +85,8 @@ void gate_to_windows(Problem& pr, const Location& loc) {
   const Eigen::Index n = pr.u.size();
   pr.active_from = std::clamp<Eigen::Index>(std::llround(from / pr.dt_s), 0, n);
   // A span reaching the last whole window runs to the end (the remainder is shorter).
-  pr.active_to = to >= 0.95 * total
-                     ? n
-                     : std::clamp<Eigen::Index>(std::llround(to / pr.dt_s), 0, n);
+  pr.active_to =
+      to >= 0.95 * total ? n : std::clamp<Eigen::Index>(std::llround(to / pr.dt_s), 0, n);
 }
 
 namespace {

@@ -1,14 +1,14 @@
 // bench_diagnose: every effect of the library, concealed four ways, over several seeds, plus
 // the null case; prints the confusion matrix, the primary parameter's error, the validation
 // fit before/after, and the run time per diagnosis (with the record length it was for).
+#include <fmt/format.h>
+
 #include <chrono>
 #include <cmath>
 #include <cstdlib>
 #include <map>
 #include <string>
 #include <vector>
-
-#include <fmt/format.h>
 
 #include "rig/diagnose/concealed.hpp"
 
@@ -67,7 +67,8 @@ int main(int argc, char** argv) {
       spec.seed = first + static_cast<std::uint64_t>(s);
       spec.duration_s = duration;
       // The null case has no drift (drift would be an effect): plain noise or a declared coupling.
-      spec.concealment = e ? cons[static_cast<std::size_t>(s) % 4] : cons[static_cast<std::size_t>(s) % 2 == 0 ? 0 : 2];
+      spec.concealment = e ? cons[static_cast<std::size_t>(s) % 4]
+                           : cons[static_cast<std::size_t>(s) % 2 == 0 ? 0 : 2];
       const ConcealedRecording rec = make_concealed(spec);
       DiagnoseResult r;
       try {
@@ -77,11 +78,17 @@ int main(int argc, char** argv) {
         r.verdict = "error";
       }
       const HypothesisFit* h = r.chosen();
-      Row row{truth, r.verdict, primary_error_pct(rec, r), h ? h->validation_fit_before : r.validation_fit_before_pct,
-              h ? h->validation_fit_after : NAN, r.elapsed_s};
-      fmt::print("  {:<22} seed {:>3} {:<12} -> {:<20} param err {:>7.1f} %  vfit {:5.1f} -> {:5.1f} %  {:5.1f} s\n",
-                 truth, spec.seed, to_string(spec.concealment), r.verdict, row.param_err_pct,
-                 row.vfit_before, row.vfit_after, row.seconds);
+      Row row{truth,
+              r.verdict,
+              primary_error_pct(rec, r),
+              h ? h->validation_fit_before : r.validation_fit_before_pct,
+              h ? h->validation_fit_after : NAN,
+              r.elapsed_s};
+      fmt::print(
+          "  {:<22} seed {:>3} {:<12} -> {:<20} param err {:>7.1f} %  vfit {:5.1f} -> {:5.1f} %  "
+          "{:5.1f} s\n",
+          truth, spec.seed, to_string(spec.concealment), r.verdict, row.param_err_pct,
+          row.vfit_before, row.vfit_after, row.seconds);
       if (verbose) {
         fmt::print("    {}\n", r.explanation);
         for (std::size_t i = 0; i < std::min<std::size_t>(4, r.hypotheses.size()); ++i) {
@@ -115,6 +122,7 @@ int main(int argc, char** argv) {
   double secs = 0;
   for (const auto& r : rows) secs += r.seconds;
   fmt::print("overall {}/{} correct ({:.0f} %), mean {:.2f} s per diagnosis of {:.0f} s records\n",
-             all_ok, all, 100.0 * all_ok / std::max(1, all), secs / std::max<std::size_t>(1, rows.size()), duration);
+             all_ok, all, 100.0 * all_ok / std::max(1, all),
+             secs / std::max<std::size_t>(1, rows.size()), duration);
   return 0;
 }

@@ -19,20 +19,28 @@ int main(int argc, char** argv) {
   ConcealedSpec spec;
   for (int i = 1; i + 1 < argc; i += 2) {
     const std::string a = argv[i], v = argv[i + 1];
-    if (a == "--effect") effect = v;
-    else if (a == "--concealment") concealment = v;
-    else if (a == "--seed") spec.seed = std::strtoull(v.c_str(), nullptr, 10);
-    else if (a == "--duration") spec.duration_s = std::atof(v.c_str());
-    else if (a == "--out") out = v;
+    if (a == "--effect")
+      effect = v;
+    else if (a == "--concealment")
+      concealment = v;
+    else if (a == "--seed")
+      spec.seed = std::strtoull(v.c_str(), nullptr, 10);
+    else if (a == "--duration")
+      spec.duration_s = std::atof(v.c_str());
+    else if (a == "--out")
+      out = v;
   }
   if (effect != "none") {
     spec.effect = effect_from_string(effect);
-    if (!spec.effect) return std::fprintf(stderr, "diagnose_conceal: unknown effect %s\n", effect.c_str()), 2;
+    if (!spec.effect)
+      return std::fprintf(stderr, "diagnose_conceal: unknown effect %s\n", effect.c_str()), 2;
   }
   bool found = false;
-  for (Concealment c : {Concealment::kNoise, Concealment::kDrift, Concealment::kAcCoupling, Concealment::kPartial})
+  for (Concealment c :
+       {Concealment::kNoise, Concealment::kDrift, Concealment::kAcCoupling, Concealment::kPartial})
     if (concealment == to_string(c)) spec.concealment = c, found = true;
-  if (!found || out.empty()) return std::fprintf(stderr, "diagnose_conceal: see the usage in the source\n"), 2;
+  if (!found || out.empty())
+    return std::fprintf(stderr, "diagnose_conceal: see the usage in the source\n"), 2;
   const ConcealedRecording rec = make_concealed(spec);
   const std::filesystem::path dir(out);
   std::filesystem::create_directories(dir);
@@ -40,7 +48,8 @@ int main(int argc, char** argv) {
   csv.precision(12);
   csv << "t,u,y\n";
   for (Eigen::Index k = 0; k < rec.input.u.size(); ++k)
-    csv << static_cast<double>(k) * rec.input.dt_s << ',' << rec.input.u(k) << ',' << rec.input.y(k) << '\n';
+    csv << static_cast<double>(k) * rec.input.dt_s << ',' << rec.input.u(k) << ',' << rec.input.y(k)
+        << '\n';
   rig::io::Sidecar sc;
   sc.sample_rate_hz = 1.0 / rec.input.dt_s;
   sc.units = {{"t", "s"}, {"u", "%"}, {"y", "kW"}};

@@ -3,13 +3,11 @@
 #include <gtest/gtest.h>
 
 #include <CLI/CLI.hpp>
-
 #include <filesystem>
 #include <fstream>
+#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
-
-#include <nlohmann/json.hpp>
 
 #include "rig/cli/commands.hpp"
 #include "rig/cli/diagnose.hpp"
@@ -34,7 +32,8 @@ class DiagnoseCli : public ::testing::Test {
     csv << "t,u,y\n";
     csv.precision(12);
     for (Eigen::Index k = 0; k < rec.input.u.size(); ++k)
-      csv << static_cast<double>(k) * rec.input.dt_s << ',' << rec.input.u(k) << ',' << rec.input.y(k) << '\n';
+      csv << static_cast<double>(k) * rec.input.dt_s << ',' << rec.input.u(k) << ','
+          << rec.input.y(k) << '\n';
     if (!sidecar.empty()) std::ofstream(dir_ / "rec.json") << sidecar;
     rig::io::ModelFile m;
     m.tf = rec.input.model;
@@ -54,13 +53,14 @@ class DiagnoseCli : public ::testing::Test {
 
   std::vector<std::string> std_args() {
     return {"--recording", (dir_ / "rec.csv").string(), "--model", (dir_ / "model.json").string(),
-            "--out", (dir_ / "out").string()};
+            "--out",       (dir_ / "out").string()};
   }
 
   fs::path dir_;
 };
 
-rig::diagnose::ConcealedRecording make(std::optional<rig::diagnose::Effect> e, double duration_s = 120.0) {
+rig::diagnose::ConcealedRecording make(std::optional<rig::diagnose::Effect> e,
+                                       double duration_s = 120.0) {
   rig::diagnose::ConcealedSpec spec;
   spec.effect = e;
   spec.seed = 77;

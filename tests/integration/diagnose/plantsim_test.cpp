@@ -29,7 +29,8 @@ Record run_plant(const std::vector<std::string>& faults, std::uint64_t seed, dou
   auto plant = plantsim::make_plant(po);
   const Eigen::Index n = static_cast<Eigen::Index>(duration_s / 0.01);
   rig::signal::GaussianOptions go;
-  go.n = n, go.dt_s = 0.01, go.bandwidth_hz = 4.0, go.sigma = 0.8, go.clip_sigma = 3.0, go.seed = seed;
+  go.n = n, go.dt_s = 0.01, go.bandwidth_hz = 4.0, go.sigma = 0.8, go.clip_sigma = 3.0,
+  go.seed = seed;
   Record r{rig::signal::gaussian_excitation(go), Eigen::VectorXd(n)};
   for (int k = 0; k < 500; ++k) plant->step();  // settle at the operating point
   for (Eigen::Index k = 0; k < n; ++k) {
@@ -40,7 +41,8 @@ Record run_plant(const std::vector<std::string>& faults, std::uint64_t seed, dou
   return r;
 }
 
-rig::diagnose::DiagnoseResult diagnose_plant(const std::vector<std::string>& faults, std::uint64_t seed) {
+rig::diagnose::DiagnoseResult diagnose_plant(const std::vector<std::string>& faults,
+                                             std::uint64_t seed) {
   const char* src = std::getenv("RIG_SOURCE_DIR");
   const std::filesystem::path root = src ? src : ".";
   auto model = rig::io::read_model(root / "plantsim/presets/stornoway.tf.json");
@@ -53,8 +55,9 @@ rig::diagnose::DiagnoseResult diagnose_plant(const std::vector<std::string>& fau
               faults.empty() ? "" : faults.front().c_str(), static_cast<unsigned long long>(seed),
               r.verdict.c_str(), r.validation_fit_before_pct, r.explanation.c_str());
   for (std::size_t i = 0; i < std::min<std::size_t>(5, r.hypotheses.size()); ++i)
-    std::printf("  #%zu %s: validation fit %.1f -> %.1f, score %+.2f\n", i + 1, r.hypotheses[i].name().c_str(),
-                r.hypotheses[i].validation_fit_before, r.hypotheses[i].validation_fit_after, r.hypotheses[i].score);
+    std::printf("  #%zu %s: validation fit %.1f -> %.1f, score %+.2f\n", i + 1,
+                r.hypotheses[i].name().c_str(), r.hypotheses[i].validation_fit_before,
+                r.hypotheses[i].validation_fit_after, r.hypotheses[i].score);
   return r;
 }
 

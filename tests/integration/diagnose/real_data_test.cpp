@@ -22,8 +22,8 @@ struct RealCase {
   const char* in;
   const char* out;
   std::optional<double> dt_s;
-  Eigen::Index from, to;       // 0-based half-open row range (to = -1: the end)
-  bool known_nonlinear;        // a linear model must not be judged sufficient
+  Eigen::Index from, to;  // 0-based half-open row range (to = -1: the end)
+  bool known_nonlinear;   // a linear model must not be judged sufficient
 };
 
 std::optional<fs::path> data_dir() {
@@ -42,7 +42,8 @@ rig::diagnose::DiagnoseResult run_case(const fs::path& root, const RealCase& c, 
   const Eigen::VectorXd u = rec.column(c.in).segment(c.from, to - c.from);
   const Eigen::VectorXd y = rec.column(c.out).segment(c.from, to - c.from);
   rig::ident::IdentifyOptions io;
-  io.method = rig::ident::IdentMethod::kMmfm;  // (SRIVC segfaulted on dryer.dat at the time of writing)
+  io.method =
+      rig::ident::IdentMethod::kMmfm;  // (SRIVC segfaulted on dryer.dat at the time of writing)
   io.correlator.lags = std::min<Eigen::Index>(256, u.size() / 8);
   const auto id = rig::ident::identify(u, y, rec.dt_s, io);
   *model_fit = id.validation_fit_pct;
@@ -55,7 +56,8 @@ TEST(RealData, VerdictsOnPublicBenchmarks) {
   const RealCase cases[] = {
       {"daisy/dryer.dat", "1", "2", 0.08, 0, -1, false},
       {"nonlinear_benchmarks/silverbox/SNLS80mV.csv", "V1", "V2", 1.0 / 610.35, 40650, 60650, true},
-      {"nonlinear_benchmarks/cascaded_tanks/dataBenchmark.csv", "uEst", "yEst", std::nullopt, 0, -1, true},
+      {"nonlinear_benchmarks/cascaded_tanks/dataBenchmark.csv", "uEst", "yEst", std::nullopt, 0, -1,
+       true},
       {"nonlinear_benchmarks/wiener_hammerstein_2009/WienerHammerBenchmark.csv", "uBenchMark",
        "yBenchMark", 1.0 / 51200.0, 5200, 25200, true},
       {"daisy/heating_system.dat", "2", "3", 2.0, 0, -1, false},
@@ -71,9 +73,12 @@ TEST(RealData, VerdictsOnPublicBenchmarks) {
       continue;
     }
     const auto* h = r.chosen();
-    std::printf("%s: identified model validation fit %.1f %%; verdict %s; validation fit %.1f -> %s %%; %.1f s\n  %s\n",
-                c.file, model_fit, r.verdict.c_str(), r.validation_fit_before_pct,
-                h ? std::to_string(h->validation_fit_after).c_str() : "-", r.elapsed_s, r.explanation.c_str());
+    std::printf(
+        "%s: identified model validation fit %.1f %%; verdict %s; validation fit %.1f -> %s %%; "
+        "%.1f s\n  %s\n",
+        c.file, model_fit, r.verdict.c_str(), r.validation_fit_before_pct,
+        h ? std::to_string(h->validation_fit_after).c_str() : "-", r.elapsed_s,
+        r.explanation.c_str());
     if (c.known_nonlinear) {
       EXPECT_NE(r.verdict, "none") << c.file;
     }

@@ -1,8 +1,9 @@
+#include "rig/diagnose/blocks.hpp"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
 
-#include "rig/diagnose/blocks.hpp"
 #include "rig/diagnose/concealed.hpp"
 #include "rig/signal/excitation.hpp"
 
@@ -58,7 +59,8 @@ TEST(Blocks, FeedbackSimulationWithoutFeedbackMatchesExactSimulation) {
   go.n = 6000, go.dt_s = 0.01, go.bandwidth_hz = 4.0, go.seed = 3;
   const Eigen::VectorXd u = signal::gaussian_excitation(go);
   const Eigen::VectorXd exact = ident::simulate(tf, u, 0.01);
-  const Eigen::VectorXd loop = simulate_with_feedback(tf, u, 0.01, [](double, double) { return 0.0; });
+  const Eigen::VectorXd loop =
+      simulate_with_feedback(tf, u, 0.01, [](double, double) { return 0.0; });
   // Mid-sample zero-order hold versus first-order hold: second order in dt.
   EXPECT_LT((exact - loop).norm() / exact.norm(), 5e-3);
 }
@@ -69,14 +71,16 @@ TEST(Blocks, CubicFeedbackStiffensTheResponse) {
   // Static equilibrium z = u - k3 z^3 with k3 = 0.25: z^3/4 + z - 2 = 0, solved by Newton.
   double zs = 1.0;
   for (int i = 0; i < 50; ++i) zs -= (0.25 * zs * zs * zs + zs - 2.0) / (0.75 * zs * zs + 1.0);
-  const Eigen::VectorXd z = simulate_with_feedback(tf, u, 0.01, [](double x, double) { return 0.25 * x * x * x; });
+  const Eigen::VectorXd z =
+      simulate_with_feedback(tf, u, 0.01, [](double x, double) { return 0.25 * x * x * x; });
   EXPECT_NEAR(z(7999), zs, 1e-6);
   EXPECT_LT(zs, 2.0);
 }
 
 TEST(Blocks, ZeroPhaseSmootherKeepsAConstantAndKillsAFastSine) {
   Eigen::VectorXd x(5000);
-  for (Eigen::Index k = 0; k < x.size(); ++k) x(k) = 3.0 + std::sin(2.0 * 3.14159 * 5.0 * 0.01 * static_cast<double>(k));
+  for (Eigen::Index k = 0; k < x.size(); ++k)
+    x(k) = 3.0 + std::sin(2.0 * 3.14159 * 5.0 * 0.01 * static_cast<double>(k));
   const Eigen::VectorXd s = smooth_zero_phase(x, 5.0, 0.01);
   EXPECT_NEAR(s(2500), 3.0, 0.01);
 }

@@ -1,11 +1,11 @@
 // Acceptance on concealed recordings (seeded; the seed of every case is printed): a smaller
 // set than bench_diagnose, with its acceptance figures.
+#include "rig/diagnose/concealed.hpp"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <cstdio>
-
-#include "rig/diagnose/concealed.hpp"
 
 namespace rig::diagnose {
 namespace {
@@ -51,9 +51,11 @@ TEST(Concealed, NullCaseIsNone) {
     spec.duration_s = kDuration_s;
     spec.concealment = s % 2 == 0 ? Concealment::kNoise : Concealment::kAcCoupling;
     const DiagnoseResult r = diagnose(make_concealed(spec).input);
-    if (r.verdict == "none") ++none;
-    else std::printf("false alarm, seed %llu: %s (%s)\n", static_cast<unsigned long long>(spec.seed),
-                     r.verdict.c_str(), r.explanation.c_str());
+    if (r.verdict == "none")
+      ++none;
+    else
+      std::printf("false alarm, seed %llu: %s (%s)\n", static_cast<unsigned long long>(spec.seed),
+                  r.verdict.c_str(), r.explanation.c_str());
   }
   EXPECT_GE(none, 19) << "of " << seeds;
 }

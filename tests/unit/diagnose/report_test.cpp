@@ -18,8 +18,10 @@ TEST(Report, JsonHasTheDocumentedKeysAndTheModelRoundTrips) {
   const ConcealedRecording rec = make_concealed(spec);
   const DiagnoseResult r = diagnose(rec.input);
   const nlohmann::json j = report_json(r, {"rec.csv", "model.json", "u", "y"});
-  for (const char* key : {"verdict", "hypotheses", "location", "explanation"}) EXPECT_TRUE(j.contains(key)) << key;
-  for (const char* key : {"band_hz", "time_windows", "amplitude_dependent"}) EXPECT_TRUE(j["location"].contains(key)) << key;
+  for (const char* key : {"verdict", "hypotheses", "location", "explanation"})
+    EXPECT_TRUE(j.contains(key)) << key;
+  for (const char* key : {"band_hz", "time_windows", "amplitude_dependent"})
+    EXPECT_TRUE(j["location"].contains(key)) << key;
   ASSERT_FALSE(j["hypotheses"].empty());
   for (const char* key : {"effect", "params", "fit_before", "fit_after", "validation_fit_before",
                           "validation_fit_after", "score"})
