@@ -79,6 +79,14 @@ TEST(RealData, VerdictsOnPublicBenchmarks) {
         c.file, model_fit, r.verdict.c_str(), r.validation_fit_before_pct,
         h ? std::to_string(h->validation_fit_after).c_str() : "-", r.elapsed_s,
         r.explanation.c_str());
+    for (std::size_t i = 0; i < std::min<std::size_t>(3, r.hypotheses.size()); ++i) {
+      const auto& hh = r.hypotheses[i];
+      std::printf("  #%zu %s [", i + 1, hh.name().c_str());
+      for (const auto& e : hh.effects)
+        for (double p : e.params) std::printf(" %.4g", p);
+      std::printf(" ]: validation fit %.1f -> %.1f, score %+.2f\n", hh.validation_fit_before,
+                  hh.validation_fit_after, hh.score);
+    }
     if (c.known_nonlinear) {
       EXPECT_NE(r.verdict, "none") << c.file;
     }
