@@ -46,7 +46,8 @@ std::string format_status(const LiveStatus& s) {
                                  s.deviation_pct, deviation_bar(s.deviation_pct, s.band_pct, 21),
                                  s.peak_deviation_pct, s.band_pct, s.bias_pct);
   for (const auto& e : s.estimates) {
-    line += fmt::format("  {} {:.4g}+-{:.2g}", e.name, e.value, e.std_error);
+    line += e.std_error > 0.0 ? fmt::format("  {} {:.4g}+-{:.2g}", e.name, e.value, e.std_error)
+                              : fmt::format("  {} {:.4g}", e.name, e.value);
   }
   if (!s.flags.empty()) {
     line += "  !";
@@ -55,15 +56,18 @@ std::string format_status(const LiveStatus& s) {
   return line;
 }
 
-LiveView::LiveView(std::FILE* out, bool tty, double interval_s)
-    : out_(out), tty_(tty), interval_s_(interval_s) {}
+LiveView::LiveView(std::FILE* out, bool tty, double interval_s, double min_wall_s)
+    : out_(out), tty_(tty), interval_s_(interval_s), min_wall_s_(min_wall_s) {}
 
 bool LiveView::is_terminal(std::FILE* out) { return out != nullptr && isatty(fileno(out)) != 0; }
 
 void LiveView::update(const LiveStatus& status, bool force) {
   if (out_ == nullptr) return;
   if (!force && status.elapsed_s - last_s_ < interval_s_) return;
+  const auto now = std::chrono::steady_clock::now();
+  if (!force && std::chrono::duration<double>(now - last_wall_).count() < min_wall_s_) return;
   last_s_ = status.elapsed_s;
+  last_wall_ = now;
   if (tty_) {
     // \r then clear to end of line, so a shorter line leaves no residue.
     fmt::print(out_, "\r{}\x1b[K", format_status(status));

@@ -4,6 +4,7 @@
 // their uncertainty, and data-quality flags.
 #pragma once
 
+#include <chrono>
 #include <cstdio>
 #include <optional>
 #include <string>
@@ -37,8 +38,9 @@ std::string format_status(const LiveStatus& status);
 
 class LiveView {
  public:
-  // `interval_s` limits refreshes by test time; `tty` chooses \r refresh or plain lines.
-  LiveView(std::FILE* out, bool tty, double interval_s);
+  // `interval_s` limits refreshes by test time, `min_wall_s` by wall time (a lockstep test
+  // runs many times faster than real time); `tty` chooses \r refresh or plain lines.
+  LiveView(std::FILE* out, bool tty, double interval_s, double min_wall_s = 0.0);
   static bool is_terminal(std::FILE* out);
   // Shows the status if at least interval_s has passed since the last refresh (or force).
   void update(const LiveStatus& status, bool force = false);
@@ -50,7 +52,9 @@ class LiveView {
   std::FILE* out_;
   bool tty_;
   double interval_s_;
+  double min_wall_s_;
   double last_s_ = -1e300;
+  std::chrono::steady_clock::time_point last_wall_{};
   bool line_open_ = false;
 };
 

@@ -129,7 +129,8 @@ void Sequencer::show_estimate(const BlockEstimate& e) {
   } else {
     for (const auto& p : e.parameters) est.push_back({p.name, p.value, p.std_error});
   }
-  est.push_back({"Td", e.delay_s, e.parameters.empty() ? 0.0 : e.parameters.back().std_error});
+  est.push_back({"Td", e.delay_s + timing_correction_s(),
+                 e.parameters.empty() ? 0.0 : e.parameters.back().std_error});
   if (std::isfinite(e.max_rel_std_error)) {
     est.push_back({"rse", e.max_rel_std_error, 0.0});
   }

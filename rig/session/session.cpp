@@ -81,8 +81,9 @@ SessionData run_commission(const TestConfig& config, const SessionOptions& optio
   wo.sync_to_disk = false;  // flushed to the kernel: survives a kill -9 of the rig
   io::RecordingWriter recorder(options.out_dir / "recording.csv", recording_columns(),
                                recording_sidecar(data), wo);
-  LiveView view(options.live_out, LiveView::is_terminal(options.live_out),
-                config.output.live_interval_s);
+  // At most 10 refreshes (terminal) or one plain line per wall-clock second.
+  const bool tty = LiveView::is_terminal(options.live_out);
+  LiveView view(options.live_out, tty, config.output.live_interval_s, tty ? 0.1 : 1.0);
   Sequencer seq(data, *link, recorder, view, options);
   run_phases(seq, options.command == "sweep");
   seq.finish();
