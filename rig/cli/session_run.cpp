@@ -47,7 +47,7 @@ void print_summary(const session::SessionData& d, const std::filesystem::path& o
 
 }  // namespace
 
-session::TestConfig load_config(const SessionArgs& args, const std::string& command) {
+session::TestConfig load_config(const SessionArgs& args, const std::string& /*command*/) {
   session::TestConfig c = args.test_file.empty()
                               ? session::parse_test_toml("", "<defaults>")
                               : session::load_test_file(args.test_file);
@@ -55,8 +55,7 @@ session::TestConfig load_config(const SessionArgs& args, const std::string& comm
     if (args.link_type != "modbus+tcp" && args.link_type != "can+udp" &&
         args.link_type != "modbus+rtu") {
       throw session::ConfigError(fmt::format(
-          "rig {}: --link-type {}: expected modbus+tcp, can+udp or modbus+rtu", command,
-          args.link_type));
+          "--link-type {}: expected modbus+tcp, can+udp or modbus+rtu", args.link_type));
     }
     if (c.link.lockstep_ticks == 0) {
       c.link.lockstep_ticks =
@@ -65,8 +64,8 @@ session::TestConfig load_config(const SessionArgs& args, const std::string& comm
     if (c.plant.preset.empty()) c.plant.preset = args.preset;
     session::validate(c);
   } else if (args.link.empty() && c.link.uri.empty()) {
-    throw session::ConfigError(fmt::format(
-        "rig {}: no link: give --link URI, link.uri in the test file, or --emulate", command));
+    throw session::ConfigError(
+        "no link: give --link URI, link.uri in the test file, or --emulate");
   }
   return c;
 }
