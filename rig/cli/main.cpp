@@ -2,6 +2,7 @@
 #include <CLI/CLI.hpp>
 
 #include "rig/cli/commands.hpp"
+#include "rig/cli/diagnose.hpp"
 #include "rig/cli/session_commands.hpp"
 
 int main(int argc, char** argv) {
@@ -12,5 +13,6 @@ int main(int argc, char** argv) {
   rig::cli::add_sweep_command(app);
   rig::cli::add_compare_command(app);
   rig::cli::add_identify_command(app);
+  rig::cli::add_diagnose_command(app);
   return rig::cli::run_app(app, argc, argv);
 }
