@@ -1,6 +1,8 @@
 #include "drivers/can/can_link.hpp"
 
 #include <algorithm>
+#include <limits>
+#include <optional>
 
 #include "drivers/bias.hpp"
 #include "drivers/can/j1939.hpp"
@@ -12,6 +14,25 @@ namespace {
 namespace j = j1939;
 using Clock = std::chrono::steady_clock;
 constexpr int kMaxFramesPerRead = 4096;
+
+bool power_bytes_not_available(const can_frame& f) {
+  return f.can_dlc == 8 && f.data[0] == 0xFF && f.data[1] == 0xFF && f.data[2] == 0xFF &&
+         f.data[3] == 0xFF;
+}
+
+// PGN 0xFF51 whose power reads J1939 "not available" (0xFFFFFFFF) but whose checksum and
+// counter are right: a valid sample with NaN power, so the supervisor trips on it as a
+// non-finite reading rather than as a broken link.
+std::optional<j::PlantSample> plant_sample_without_power(const can_frame& f) {
+  if (!power_bytes_not_available(f)) return std::nullopt;
+  const std::uint8_t nibble = f.data[7] >> 4;
+  const std::uint16_t counter = static_cast<std::uint16_t>(f.data[4] | (f.data[5] << 8));
+  if ((f.data[7] & 0x0F) != j::checksum4(f.data, nibble, f.can_id & CAN_EFF_MASK) ||
+      nibble != (counter & 0x0F)) {
+    return std::nullopt;
+  }
+  return j::PlantSample{std::numeric_limits<double>::quiet_NaN(), counter, f.data[6]};
+}
 
 class CanLink final : public LinkBase {
  public:
@@ -100,7 +121,11 @@ LinkResult<void> CanLink::apply(const can_frame& f, bool& fresh, bool& saw_old) 
   switch (j::pgn_of(f)) {
     case j::kPgnPlantSample: {
       auto m = j::decode_plant_sample(f);
-      if (!m) return m.error();
+      if (!m) {
+        auto na = plant_sample_without_power(f);
+        if (!na) return m.error();
+        m = *na;
+      }
       if (last_seen_ && m->counter == *last_seen_) {
         saw_old = true;  // the tick we already returned
         return {};
@@ -125,6 +150,10 @@ LinkResult<void> CanLink::apply(const can_frame& f, bool& fresh, bool& saw_old) 
     }
     case j::kPgnGtacp: {
       auto m = j::decode_gtacp(f);
+      if (!m && power_bytes_not_available(f)) {
+        sample_.power_kw = std::numeric_limits<double>::quiet_NaN();
+        return {};
+      }
       if (!m) return m.error();
       sample_.power_kw = m->real_power_w / 1000.0;
       return {};

@@ -4,6 +4,7 @@
 
 #include <cerrno>
 #include <cstring>
+#include <limits>
 
 #include "drivers/bias.hpp"
 #include "drivers/modbus/register_map.hpp"
@@ -151,7 +152,10 @@ LinkResult<Sample> ModbusLink::read() {
     return (std::uint32_t{in[hi]} << 16) | std::uint32_t{in[hi + 1]};  // high word first
   };
   Sample s;
-  s.power_kw = static_cast<std::int32_t>(word32(map::kInPowerHi)) / 1000.0;
+  // INT32_MIN is the governor's "not available": NaN, which the supervisor trips on.
+  const auto power_w = static_cast<std::int32_t>(word32(map::kInPowerHi));
+  s.power_kw = power_w == map::kPowerNotAvailable ? std::numeric_limits<double>::quiet_NaN()
+                                                  : power_w / 1000.0;
   s.speed_rpm = in[map::kInSpeed] * map::kSpeedRpmPerBit;
   s.freq_hz = in[map::kInFreq] * map::kFreqHzPerBit;
   s.voltage_v = in[map::kInVoltage] * map::kVoltsPerBit;

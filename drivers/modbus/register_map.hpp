@@ -29,6 +29,9 @@ inline constexpr int kInTimeLo = 8;
 inline constexpr int kInCounter = 9;   // uint16, +1 per plant tick
 inline constexpr int kInputCount = 10;
 
+// Input 0-1 value meaning "power not available" (a real reading saturates above it).
+inline constexpr std::int32_t kPowerNotAvailable = INT32_MIN;
+
 // Scalings.
 inline constexpr double kBiasPctPerBit = 0.001;
 inline constexpr double kSpeedRpmPerBit = 0.1;

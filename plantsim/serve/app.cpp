@@ -141,6 +141,7 @@ int serve(const ServeOptions& o, const PlantHooks& hooks) {
       return 0;
     }
     r.governor = std::make_unique<Governor>(hooks.make_plant(o.plant));
+    r.governor->set_serve_faults(ServeFaultSchedule(o.serve_faults));
     if (!open_endpoints(o, r)) return 2;
   } catch (const ConfigError& e) {
     std::cerr << "plantsim: " << e.what() << "\n";

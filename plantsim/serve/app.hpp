@@ -13,9 +13,11 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "plantsim/plant/plant.hpp"
 #include "plantsim/serve/modbus_node.hpp"
+#include "plantsim/serve/serve_faults.hpp"
 
 namespace plantsim::serve {
 
@@ -28,7 +30,8 @@ struct PlantHooks {
 };
 
 struct ServeOptions {
-  PlantOptions plant;
+  PlantOptions plant;                        // plant.faults: parameter changes only
+  std::vector<ServeFaultChange> serve_faults;  // --fault serve.* (serve_faults.hpp)
   std::optional<std::string> modbus;  // endpoint text; default tcp://127.0.0.1:1502 if no --can
   std::optional<std::string> can;
   ClockMode clock = ClockMode::kRealtime;

@@ -4,6 +4,7 @@
 #include <poll.h>
 
 #include <algorithm>
+#include <cmath>
 
 #include "drivers/can/j1939.hpp"
 
@@ -18,6 +19,16 @@ constexpr std::chrono::milliseconds kGtacpPeriod{100};
 bool due(const GovernorSnapshot& s, std::chrono::nanoseconds tick,
          std::chrono::milliseconds period) {
   return (s.plant_time / period) != ((s.plant_time - tick) / period);
+}
+
+// Power bytes 0-3 = 0xFFFFFFFF, J1939's "not available". PGN 0xFF51 carries a checksum over
+// its data (byte 7: counter high nibble, checksum low nibble), so it is resealed.
+void mark_power_not_available(can_frame& f, bool sealed) {
+  for (int i = 0; i < 4; ++i) f.data[i] = 0xFF;
+  if (!sealed) return;
+  const auto counter = static_cast<std::uint8_t>(f.data[7] >> 4);
+  f.data[7] = static_cast<std::uint8_t>(
+      (counter << 4) | j1939::checksum4(f.data, counter, f.can_id & CAN_EFF_MASK));
 }
 
 }  // namespace
@@ -89,7 +100,8 @@ void CanNode::run() {
           ++counters_.bad_checksum;  // a datagram that is not a can_frame
         }
       }
-      if (frame) handle(*frame);
+      // serve.drop_link: frames are taken off the socket and ignored (nobody listens).
+      if (frame && !governor_.snapshot().link_dropped) handle(*frame);
     }
   }
 }
@@ -162,11 +174,13 @@ void CanNode::handle_tsc1(const can_frame& frame) {
 
 void CanNode::on_tick(const GovernorSnapshot& s) {
   std::lock_guard lock(mu_);
-  if (!ep_->has_peer()) return;
+  if (!ep_->has_peer() || s.link_dropped) return;
   const auto& m = s.measurement;
-  send_locked(j1939::encode_plant_sample(
-      j1939::PlantSample{m.power_w, static_cast<std::uint16_t>(s.ticks & 0xFFFF),
-                         static_cast<std::uint8_t>(s.status & 0xFF)}));
+  can_frame sample = j1939::encode_plant_sample(j1939::PlantSample{
+      m.power_w, s.counter(), static_cast<std::uint8_t>(s.status & 0xFF)});
+  const bool power_na = s.power_invalid || !std::isfinite(m.power_w);
+  if (power_na) mark_power_not_available(sample, true);
+  send_locked(sample);
   const auto tick = governor_.tick_period();
   if (due(s, tick, kEec1Period)) {
     // Torque in % of rated: P = T w, so T/T_rated = (P/P_rated) (w_rated/w).
@@ -176,7 +190,11 @@ void CanNode::on_tick(const GovernorSnapshot& s) {
     send_locked(
         j1939::encode_eec1(j1939::Eec1{m.speed_rpm, std::clamp(torque_pct, -125.0, 125.0)}));
   }
-  if (due(s, tick, kGtacpPeriod)) send_locked(j1939::encode_gtacp(j1939::Gtacp{m.power_w, 0.0}));
+  if (due(s, tick, kGtacpPeriod)) {
+    can_frame gtacp = j1939::encode_gtacp(j1939::Gtacp{m.power_w, 0.0});
+    if (power_na) mark_power_not_available(gtacp, false);
+    send_locked(gtacp);
+  }
 }
 
 void CanNode::send_locked(const can_frame& frame) {

@@ -24,7 +24,10 @@ void add_options(CLI::App& app, ServeOptions& o, std::string& clock, std::string
                  "sends PGN 0xFF52)")
       ->default_str("realtime");
   app.add_option("--tick", tick, "Plant tick, e.g. 1ms, 500us")->default_str("1ms");
-  app.add_option("--fault", o.plant.faults, "Parameter change NAME=VALUE@t=SECONDS (repeatable)");
+  app.add_option("--fault", o.plant.faults,
+                 "Parameter change NAME=VALUE@t=SECONDS (plant time, repeatable); interface "
+                 "faults serve.freeze_counter, serve.nan_power, serve.drop_link =1 (on) or 0 "
+                 "(off), e.g. serve.nan_power=1@t=30");
   app.add_option("--seed", o.plant.seed, "Seed of the plant's noise")->default_str("1");
   app.add_option("--duration", o.duration_s, "Stop after this much plant time (seconds)");
   app.add_option("--linearise", o.linearise_to,
@@ -45,6 +48,7 @@ void validate(ServeOptions& o, const std::string& clock, const std::string& tick
     throw ConfigError(fmt::format("--clock '{}': expected realtime or lockstep", clock));
   }
   o.plant.tick = parse_tick(tick);
+  o.serve_faults = split_serve_faults(o.plant.faults);
   if (o.duration_s && !(*o.duration_s > 0.0 && *o.duration_s < 1e7)) {
     throw ConfigError(fmt::format("--duration {}: expected seconds > 0", *o.duration_s));
   }

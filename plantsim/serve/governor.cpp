@@ -35,6 +35,12 @@ void Governor::heartbeat(CommandSource source, std::uint32_t token) {
   last = token;
 }
 
+void Governor::set_serve_faults(ServeFaultSchedule faults) {
+  std::lock_guard lock(mu_);
+  serve_faults_ = std::move(faults);
+  update_snapshot_locked();
+}
+
 void Governor::tick() {
   {
     std::lock_guard lock(mu_);
@@ -74,6 +80,14 @@ void Governor::update_snapshot_locked() {
   s.measurement = plant_->measure();
   s.ticks = plant_->ticks();
   s.plant_time = tick_period_ * static_cast<std::int64_t>(s.ticks);
+  // A frozen counter stops at its value for the first tick the freeze is in force.
+  if (serve_faults_.active(ServeFault::kFreezeCounter, s.plant_time)) {
+    if (!s.frozen_counter) s.frozen_counter = static_cast<std::uint16_t>(s.ticks & 0xFFFFu);
+  } else {
+    s.frozen_counter.reset();
+  }
+  s.power_invalid = serve_faults_.active(ServeFault::kNanPower, s.plant_time);
+  s.link_dropped = s.link_dropped || serve_faults_.active(ServeFault::kDropLink, s.plant_time);
   s.bias_requested_pct = requested_pct_;
   s.enabled = enabled_;
   const bool active = enabled_ && !s.heartbeat_lost;

@@ -27,6 +27,7 @@
 #include <vector>
 
 #include "plantsim/plant/plant.hpp"
+#include "plantsim/serve/serve_faults.hpp"
 
 namespace plantsim::serve {
 
@@ -43,6 +44,15 @@ struct GovernorSnapshot {
   std::uint16_t status = 0;  // drivers::StatusBit flags
   std::uint64_t ticks = 0;   // ticks taken (the sample counter is its low 16 bits)
   std::chrono::nanoseconds plant_time{0};
+  // Serve faults in force (serve_faults.hpp): the counter the transports publish while it is
+  // frozen, power reported "not available", the link dropped.
+  std::optional<std::uint16_t> frozen_counter;
+  bool power_invalid = false;
+  bool link_dropped = false;
+  // The sample counter as published: ticks mod 2^16, or the frozen value.
+  std::uint16_t counter() const {
+    return frozen_counter ? *frozen_counter : static_cast<std::uint16_t>(ticks & 0xFFFFu);
+  }
 };
 
 struct GovernorOptions {
@@ -60,6 +70,8 @@ class Governor {
   void set_bias_pct(double bias_pct);
   void set_enable(bool enable);
   void heartbeat(CommandSource source, std::uint32_t token);
+  // Interface faults on plant time (--fault serve.*); set before serving starts.
+  void set_serve_faults(ServeFaultSchedule faults);
 
   void tick();                        // one plant tick
   void advance(std::uint32_t ticks);  // lockstep: exactly `ticks` ticks, then return
@@ -89,6 +101,7 @@ class Governor {
   std::optional<std::uint32_t> last_token_[3];
   std::optional<std::chrono::nanoseconds> alive_at_;  // plant time of the last heartbeat change
   GovernorSnapshot snapshot_;
+  ServeFaultSchedule serve_faults_;
   std::vector<TickListener> listeners_;
 };
 

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <string>
+#include <thread>
 
 #include "drivers/modbus/register_map.hpp"
 
@@ -20,8 +21,12 @@ std::int64_t saturate(double value, std::int64_t lo, std::int64_t hi) {
 
 void encode_input_registers(const GovernorSnapshot& s, std::uint16_t* regs) {
   const auto& m = s.measurement;
+  // INT32_MIN is reserved for "not available" (serve.nan_power, or a non-finite reading), so
+  // a real reading saturates one above it and the rig maps INT32_MIN to NaN.
+  const bool power_na = s.power_invalid || !std::isfinite(m.power_w);
   const auto power_w = static_cast<std::uint32_t>(
-      static_cast<std::int32_t>(saturate(m.power_w, INT32_MIN, INT32_MAX)));
+      power_na ? map::kPowerNotAvailable
+               : static_cast<std::int32_t>(saturate(m.power_w, INT32_MIN + 1, INT32_MAX)));
   regs[map::kInPowerHi] = static_cast<std::uint16_t>(power_w >> 16);
   regs[map::kInPowerLo] = static_cast<std::uint16_t>(power_w & 0xFFFFu);
   regs[map::kInSpeed] =
@@ -37,7 +42,7 @@ void encode_input_registers(const GovernorSnapshot& s, std::uint16_t* regs) {
       std::chrono::duration_cast<std::chrono::milliseconds>(s.plant_time).count());
   regs[map::kInTimeHi] = static_cast<std::uint16_t>(time_ms >> 16);
   regs[map::kInTimeLo] = static_cast<std::uint16_t>(time_ms & 0xFFFFu);
-  regs[map::kInCounter] = static_cast<std::uint16_t>(s.ticks & 0xFFFFu);
+  regs[map::kInCounter] = s.counter();
 }
 
 drivers::LinkResult<std::unique_ptr<ModbusNode>> ModbusNode::open(const drivers::LinkUri& endpoint,
@@ -63,7 +68,10 @@ drivers::LinkResult<std::unique_ptr<ModbusNode>> ModbusNode::open(const drivers:
 
 ModbusNode::ModbusNode(std::unique_ptr<drivers::ModbusServer> server, Governor& governor,
                        ClockMode clock)
-    : server_(std::move(server)), governor_(governor), clock_(clock) {}
+    : server_(std::move(server)),
+      endpoint_(server_->endpoint()),
+      governor_(governor),
+      clock_(clock) {}
 
 ModbusNode::~ModbusNode() { stop(); }
 
@@ -100,7 +108,16 @@ void ModbusNode::run() {
       failure_ = result.error();
       return;
     }
+    if (governor_.snapshot().link_dropped) break;
   }
+  if (stop_) return;
+  // serve.drop_link: closing the listener and every connection is what the rig sees when a
+  // gateway or cable goes (ECONNRESET, then ECONNREFUSED); nothing answers any more.
+  {
+    std::lock_guard lock(mu_);
+    server_.reset();
+  }
+  while (!stop_) std::this_thread::sleep_for(std::chrono::milliseconds(50));
 }
 
 void ModbusNode::on_request(const drivers::ModbusRequest& request, modbus_mapping_t& m) {

@@ -5,6 +5,9 @@
 // Lockstep: a write of N to holding 100 advances the plant exactly N ticks *before* that
 // write is answered, so the rig's next read sees the plant N ticks on. In realtime the
 // register is stored but does nothing (the clock thread ticks the plant).
+//
+// serve.drop_link: after the request that carried plant time past the drop (lockstep), or
+// within one 50 ms poll of it (realtime), the listener and every connection are closed.
 #pragma once
 
 #include <atomic>
@@ -24,7 +27,8 @@ enum class ClockMode { kRealtime, kLockstep };
 
 // Input registers 0-9 from a snapshot (power int32 W high word first, speed 0.1 rpm,
 // frequency 0.001 Hz, voltage 1 V, bias echo int16 0.001 %, status, plant time uint32 ms high
-// word first, sample counter = ticks mod 2^16). Values outside a register's range saturate.
+// word first, sample counter = ticks mod 2^16 unless frozen). Values outside a register's range
+// saturate; power "not available" (serve.nan_power or non-finite) is INT32_MIN.
 void encode_input_registers(const GovernorSnapshot& s, std::uint16_t* regs);
 
 class ModbusNode {
@@ -35,7 +39,7 @@ class ModbusNode {
   ~ModbusNode();
   void start();
   void stop();  // joins the thread; idempotent
-  std::string endpoint() const { return server_->endpoint(); }
+  std::string endpoint() const { return endpoint_; }
   // Set when the transport itself failed (device gone); the thread has then stopped.
   std::optional<drivers::LinkError> failure() const;
   drivers::ModbusServerCounters counters() const;
@@ -45,7 +49,8 @@ class ModbusNode {
   void run();
   void on_request(const drivers::ModbusRequest& request, modbus_mapping_t& map);
 
-  std::unique_ptr<drivers::ModbusServer> server_;
+  std::unique_ptr<drivers::ModbusServer> server_;  // reset when serve.drop_link takes effect
+  std::string endpoint_;
   Governor& governor_;
   ClockMode clock_;
   std::thread thread_;
