@@ -10,14 +10,19 @@
 // A last test kills a realtime rig and watches, through its own Modbus connection, the
 // governor drop the bias within 500 ms + 1 tick of the rig's last heartbeat.
 #include <gtest/gtest.h>
+#include <fcntl.h>
 #include <modbus.h>
 #include <signal.h>
+#include <spawn.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
 #include <fmt/format.h>
 
+#include <cerrno>
 #include <chrono>
 #include <cmath>
+#include <optional>
 #include <fstream>
 #include <regex>
 #include <thread>
@@ -241,6 +246,107 @@ TEST(SafetyFaults, UnknownServeFaultIsAUsageError) {
   const std::string log = read_text(dir / "log");
   EXPECT_NE(log.find("serve.ignore_heartbeat"), std::string::npos) << log;
   EXPECT_EQ(std::count(log.begin(), log.end(), '\n'), 1) << log;
+}
+
+// ---- heartbeat: the governor side drops the bias when the rig stops --------------------
+
+// A child process with stdout and stderr in `log`; its pid is the program's own.
+pid_t spawn(const std::vector<std::string>& args, const std::filesystem::path& log) {
+  posix_spawn_file_actions_t actions;
+  posix_spawn_file_actions_init(&actions);
+  posix_spawn_file_actions_addopen(&actions, 1, log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+  posix_spawn_file_actions_adddup2(&actions, 1, 2);
+  std::vector<char*> argv;
+  for (const auto& a : args) argv.push_back(const_cast<char*>(a.c_str()));
+  argv.push_back(nullptr);
+  pid_t pid = -1;
+  const int rc = posix_spawn(&pid, argv[0], &actions, nullptr, argv.data(), environ);
+  posix_spawn_file_actions_destroy(&actions);
+  return rc == 0 ? pid : -1;
+}
+
+// Input registers 0-9 over an independent libmodbus connection; nullopt when the read failed.
+struct GovernorView {
+  double bias_echo_pct = 0.0;
+  std::uint16_t status = 0;
+};
+std::optional<GovernorView> read_governor(modbus_t* ctx) {
+  std::uint16_t in[10] = {};
+  if (modbus_read_input_registers(ctx, 0, 10, in) != 10) return std::nullopt;
+  return GovernorView{static_cast<std::int16_t>(in[5]) * 0.001, in[6]};
+}
+
+TEST(SafetyFaults, KilledRealtimeRigLosesTheBiasWithin500msPlusOneTick) {
+  const auto dir = fresh_dir("safety-heartbeat");
+  const pid_t plant = spawn({(bin_dir() / "plantsim").string(), "--preset", "stornoway", "--seed",
+                             "3", "--clock", "realtime", "--modbus", "tcp://127.0.0.1:0"},
+                            dir / "plantsim.log");
+  ASSERT_GT(plant, 0);
+  const std::regex ready("modbus tcp://127\\.0\\.0\\.1:([0-9]+) ready");
+  int port = 0;
+  for (int i = 0; i < 100 && port == 0; ++i) {
+    std::smatch m;
+    const std::string text = read_text(dir / "plantsim.log");
+    if (std::regex_search(text, m, ready)) port = std::stoi(m[1].str());
+    std::this_thread::sleep_for(50ms);
+  }
+  ASSERT_GT(port, 0) << read_text(dir / "plantsim.log");
+  std::ofstream(dir / "rt.toml") << "[steady_state]\nduration_s = 3.0\n[pilot]\nduration_s = 20.0\n";
+  const pid_t rig = spawn({(bin_dir() / "rig").string(), "commission", "--quiet", "--link",
+                           fmt::format("modbus+tcp://127.0.0.1:{}?unit=1", port), "--test",
+                           (dir / "rt.toml").string(), "--out", (dir / "out").string()},
+                          dir / "rig.log");
+  ASSERT_GT(rig, 0);
+  modbus_t* ctx = modbus_new_tcp("127.0.0.1", port);
+  ASSERT_NE(ctx, nullptr);
+  modbus_set_response_timeout(ctx, 0, 200000);
+  ASSERT_EQ(modbus_connect(ctx), 0) << modbus_strerror(errno);
+  // Pilot under way for a second: the governor applies a (non-zero) bias from the rig.
+  const auto limit = Clock::now() + 30s;
+  auto active_since = Clock::time_point::max();
+  while (Clock::now() < limit) {
+    const auto g = read_governor(ctx);
+    const bool active = g && (g->status & 0x4) != 0;
+    if (!active) active_since = Clock::time_point::max();
+    if (active && active_since == Clock::time_point::max()) active_since = Clock::now();
+    if (active && g->bias_echo_pct != 0.0 && Clock::now() - active_since > 1s) break;
+    std::this_thread::sleep_for(5ms);
+  }
+  ASSERT_LT(Clock::now(), limit) << "the bias never became active: " << read_text(dir / "rig.log");
+  ASSERT_EQ(kill(rig, SIGKILL), 0);
+  const auto killed = Clock::now();
+  // Last read that still showed the bias (sent time) and first that showed it gone (returned).
+  auto last_applied_sent = killed;
+  auto gone_returned = Clock::time_point::max();
+  GovernorView gone;
+  while (Clock::now() - killed < 3s) {
+    const auto sent = Clock::now();
+    const auto g = read_governor(ctx);
+    if (g && g->bias_echo_pct != 0.0) last_applied_sent = sent;
+    if (g && g->bias_echo_pct == 0.0 && (g->status & 0x8) != 0) {
+      gone_returned = Clock::now();
+      gone = *g;
+      break;
+    }
+    std::this_thread::sleep_for(1ms);
+  }
+  modbus_close(ctx);
+  modbus_free(ctx);
+  waitpid(rig, nullptr, 0);
+  kill(plant, SIGTERM);
+  waitpid(plant, nullptr, 0);
+  ASSERT_NE(gone_returned, Clock::time_point::max()) << "bias still applied 3 s after the kill";
+  const double upper_s = std::chrono::duration<double>(gone_returned - killed).count();
+  const double lower_s = std::chrono::duration<double>(last_applied_sent - killed).count();
+  std::printf("  bias dropped between %.1f and %.1f ms after SIGKILL (status 0x%04x)\n",
+              1e3 * lower_s, 1e3 * upper_s, unsigned{gone.status});
+  // The rig's last heartbeat write was at most one 10 ms sample before the kill; the drop is
+  // due 500 ms + one 1 ms tick after it. Allowances: 40 ms for scheduling on a shared machine
+  // below, 50 ms for the observing read and a late realtime tick above.
+  EXPECT_GE(lower_s, 0.500 - 0.010 - 0.040);
+  EXPECT_LE(upper_s, 0.501 + 0.050);
+  // kill -9 left a readable recording.
+  EXPECT_GT(io::read_recording(dir / "out/recording.csv").rows(), 300);
 }
 
 }  // namespace
