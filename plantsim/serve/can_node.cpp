@@ -27,8 +27,8 @@ void mark_power_not_available(can_frame& f, bool sealed) {
   for (int i = 0; i < 4; ++i) f.data[i] = 0xFF;
   if (!sealed) return;
   const auto counter = static_cast<std::uint8_t>(f.data[7] >> 4);
-  f.data[7] = static_cast<std::uint8_t>(
-      (counter << 4) | j1939::checksum4(f.data, counter, f.can_id & CAN_EFF_MASK));
+  f.data[7] = static_cast<std::uint8_t>((counter << 4) |
+                                        j1939::checksum4(f.data, counter, f.can_id & CAN_EFF_MASK));
 }
 
 }  // namespace
@@ -176,8 +176,8 @@ void CanNode::on_tick(const GovernorSnapshot& s) {
   std::lock_guard lock(mu_);
   if (!ep_->has_peer() || s.link_dropped) return;
   const auto& m = s.measurement;
-  can_frame sample = j1939::encode_plant_sample(j1939::PlantSample{
-      m.power_w, s.counter(), static_cast<std::uint8_t>(s.status & 0xFF)});
+  can_frame sample = j1939::encode_plant_sample(
+      j1939::PlantSample{m.power_w, s.counter(), static_cast<std::uint8_t>(s.status & 0xFF)});
   const bool power_na = s.power_invalid || !std::isfinite(m.power_w);
   if (power_na) mark_power_not_available(sample, true);
   send_locked(sample);

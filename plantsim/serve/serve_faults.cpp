@@ -31,9 +31,12 @@ bool parse_number(const std::string& s, double& out) {
 
 const char* to_string(ServeFault fault) {
   switch (fault) {
-    case ServeFault::kFreezeCounter: return "serve.freeze_counter";
-    case ServeFault::kNanPower: return "serve.nan_power";
-    case ServeFault::kDropLink: return "serve.drop_link";
+    case ServeFault::kFreezeCounter:
+      return "serve.freeze_counter";
+    case ServeFault::kNanPower:
+      return "serve.nan_power";
+    case ServeFault::kDropLink:
+      return "serve.drop_link";
   }
   return "serve.?";
 }

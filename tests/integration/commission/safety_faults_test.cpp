@@ -9,21 +9,20 @@
 //   * the recording reads back (rig::io::read_recording) with every row up to the fault.
 // A last test kills a realtime rig and watches, through its own Modbus connection, the
 // governor drop the bias within 500 ms + 1 tick of the rig's last heartbeat.
-#include <gtest/gtest.h>
 #include <fcntl.h>
+#include <fmt/format.h>
+#include <gtest/gtest.h>
 #include <modbus.h>
 #include <signal.h>
 #include <spawn.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
-#include <fmt/format.h>
-
 #include <cerrno>
 #include <chrono>
 #include <cmath>
-#include <optional>
 #include <fstream>
+#include <optional>
 #include <regex>
 #include <thread>
 
@@ -64,7 +63,7 @@ struct FaultRun {
 };
 
 FaultRun commission(const std::string& name, const std::vector<std::string>& faults,
-               const std::string& extra = "") {
+                    const std::string& extra = "") {
   const auto dir = fresh_dir("safety-" + name);
   std::ofstream(dir / "test.toml") << kProfile;
   std::string args = fmt::format("commission --emulate --seed 1 --quiet {} --test {} --out {}",
@@ -155,8 +154,9 @@ void expect_ramp_to_baseline(const io::Recording& rec, Eigen::Index from, double
   const double ramp_s = t(zero) - t_detect_s;
   EXPECT_LE(ramp_s, u_bound_pct / kRampPctPerS + kDt)
       << "took " << ramp_s << " s from a bias of at most " << u_bound_pct << " %";
-  std::printf("  detected at t=%.2f s, |u| <= %.4f %% then, back at baseline %.2f s later (%ld rows)\n",
-              t_detect_s, u_bound_pct, ramp_s, static_cast<long>(last - from + 1));
+  std::printf(
+      "  detected at t=%.2f s, |u| <= %.4f %% then, back at baseline %.2f s later (%ld rows)\n",
+      t_detect_s, u_bound_pct, ramp_s, static_cast<long>(last - from + 1));
 }
 
 // A fault whose bad samples are not recorded: the detection is one tick after the first
@@ -203,7 +203,7 @@ TEST(SafetyFaults, PowerNotAvailableForGoodStopsTheRecordingAtTheFault) {
 
 TEST(SafetyFaults, PowerNotAvailableOverCanTripsNotFinite) {
   const FaultRun r = commission("nan-can", {fmt::format("serve.nan_power=1@t={}", kFaultS)},
-                           "--link-type can+udp");
+                                "--link-type can+udp");
   expect_tripped_at_gap(r, "not_finite");
 }
 
@@ -231,8 +231,7 @@ TEST(SafetyFaults, GridStepOutOfBandExits4AndRampsBack) {
   EXPECT_NEAR(r.rec.column("plant_time_s")(bad), kFaultS, 5.0 * kDt);
   const double t_detect = detection_time(r);
   EXPECT_NEAR(t_detect, t(bad) + kDt, 1e-6) << "not detected at the next tick";
-  const double u_bound =
-      std::abs(r.rec.column("u")(bad)) + largest_excitation_step(r.rec, bad + 1);
+  const double u_bound = std::abs(r.rec.column("u")(bad)) + largest_excitation_step(r.rec, bad + 1);
   expect_ramp_to_baseline(r.rec, bad + 1, t_detect, u_bound);
 }
 
@@ -291,7 +290,8 @@ TEST(SafetyFaults, KilledRealtimeRigLosesTheBiasWithin500msPlusOneTick) {
     std::this_thread::sleep_for(50ms);
   }
   ASSERT_GT(port, 0) << read_text(dir / "plantsim.log");
-  std::ofstream(dir / "rt.toml") << "[steady_state]\nduration_s = 3.0\n[pilot]\nduration_s = 20.0\n";
+  std::ofstream(dir / "rt.toml")
+      << "[steady_state]\nduration_s = 3.0\n[pilot]\nduration_s = 20.0\n";
   const pid_t rig = spawn({(bin_dir() / "rig").string(), "commission", "--quiet", "--link",
                            fmt::format("modbus+tcp://127.0.0.1:{}?unit=1", port), "--test",
                            (dir / "rt.toml").string(), "--out", (dir / "out").string()},
