@@ -74,6 +74,10 @@ FaultRun commission(const std::string& name, const std::vector<std::string>& fau
   r.log = read_text(dir / "rig.log");
   r.report = read_json(dir / "out/report.json");
   r.rec = io::read_recording(dir / "out/recording.csv");
+  // The sidecar was closed properly and counts every row the CSV holds.
+  const auto sidecar = read_json(dir / "out/recording.json");
+  EXPECT_EQ(sidecar["rows"].get<long>(), static_cast<long>(r.rec.rows()));
+  EXPECT_EQ(sidecar["complete"], true);
   return r;
 }
 
