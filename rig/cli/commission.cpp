@@ -15,11 +15,16 @@ void add_session_options(CLI::App& cmd, SessionArgs& a) {
   cmd.add_option("--test", a.test_file, "Test file (TOML, see docs/test-file.md)")
       ->check(CLI::ExistingFile);
   cmd.add_option("--out", a.out_dir, "Output folder")->required();
-  cmd.add_flag("--emulate", a.emulate, "Start plantsim in lockstep and test against it");
+  cmd.add_flag("--emulate", a.emulate, "Start plantsim (see --clock) and test against it");
   cmd.add_option("--preset", a.preset, "Emulated plant preset")->default_str("stornoway");
   cmd.add_option("--seed", a.seed, "Emulated plant noise seed")->default_str("1");
   cmd.add_option("--link-type", a.link_type, "Emulated link: modbus+tcp, can+udp, modbus+rtu")
       ->default_str("modbus+tcp");
+  cmd.add_option("--clock", a.clock,
+                 "Emulated plant clock: lockstep (fast, reproducible) or realtime (paced on the "
+                 "monotonic clock, loop timing measured)")
+      ->check(CLI::IsMember({"lockstep", "realtime"}))
+      ->default_str("lockstep");
   cmd.add_option("--fault", a.faults, "Emulated plant fault NAME=VALUE@t=SECONDS (repeatable)");
   cmd.add_flag("--json", a.json, "Print report.json on stdout instead of the summary");
   cmd.add_flag("--quiet", a.quiet, "No live view");

@@ -57,12 +57,22 @@ session::TestConfig load_config(const SessionArgs& args, const std::string& /*co
       throw session::ConfigError(fmt::format(
           "--link-type {}: expected modbus+tcp, can+udp or modbus+rtu", args.link_type));
     }
-    if (c.link.lockstep_ticks == 0) {
+    if (args.clock == "realtime") {
+      // The plant integrates in wall time and the rig paces itself on the monotonic clock.
+      if (c.link.lockstep_ticks > 0) {
+        throw session::ConfigError(fmt::format(
+            "--clock realtime: {} sets link.lockstep_ticks = {}; remove it or use --clock "
+            "lockstep", c.source, c.link.lockstep_ticks));
+      }
+    } else if (c.link.lockstep_ticks == 0) {
       c.link.lockstep_ticks =
           static_cast<int>(std::lround(1.0 / (c.link.sample_rate_hz * kPlantTickS)));
     }
     if (c.plant.preset.empty()) c.plant.preset = args.preset;
     session::validate(c);
+  } else if (!args.clock.empty()) {
+    throw session::ConfigError("--clock: only with --emulate (a governor link runs in real "
+                               "time unless link.lockstep_ticks > 0)");
   } else if (args.link.empty() && c.link.uri.empty()) {
     throw session::ConfigError(
         "no link: give --link URI, link.uri in the test file, or --emulate");
@@ -86,6 +96,7 @@ int run_session(const SessionArgs& args, session::TestConfig config, const std::
     e.preset = args.preset;
     e.seed = args.seed;
     e.link_type = args.link_type;
+    e.clock = args.clock.empty() ? "lockstep" : args.clock;
     e.faults = args.faults;
     e.log = args.out_dir / "plantsim.log";
     try {

@@ -20,6 +20,7 @@ struct SessionArgs {
   std::string preset = "stornoway";
   std::uint64_t seed = 1;
   std::string link_type = "modbus+tcp";
+  std::string clock;  // --clock with --emulate: "lockstep" (empty: the default) or "realtime"
   std::vector<std::string> faults;
   bool json = false;
   bool quiet = false;

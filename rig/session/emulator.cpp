@@ -96,7 +96,7 @@ void EmulatedPlant::start_socat(const std::filesystem::path& dir) {
 
 EmulatedPlant::EmulatedPlant(const EmulatorOptions& o) {
   std::vector<std::string> args = {o.plantsim.string(), "--preset", o.preset, "--seed",
-                                   std::to_string(o.seed), "--clock", "lockstep"};
+                                   std::to_string(o.seed), "--clock", o.clock};
   if (o.link_type == "modbus+tcp") {
     args.insert(args.end(), {"--modbus", "tcp://127.0.0.1:0"});
   } else if (o.link_type == "can+udp") {

@@ -1,5 +1,5 @@
 // `rig commission --emulate`: starts the plantsim executable (from the rig's own bin dir) in
-// lockstep on an ephemeral port, reads the endpoint it announces, and stops it afterwards.
+// lockstep (or on its realtime clock) on an ephemeral port, reads the endpoint it announces, and stops it afterwards.
 // For modbus+rtu a socat pseudo-terminal pair joins the two sides.
 #pragma once
 
@@ -24,6 +24,7 @@ struct EmulatorOptions {
   std::string preset = "stornoway";
   std::uint64_t seed = 1;
   std::string link_type = "modbus+tcp";  // modbus+tcp | can+udp | modbus+rtu
+  std::string clock = "lockstep";        // plantsim --clock: lockstep | realtime
   std::vector<std::string> faults;       // NAME=VALUE@t=SECONDS
   std::filesystem::path log;             // plantsim's stdout/stderr go here (empty: discarded)
   std::chrono::milliseconds start_timeout{20000};

@@ -93,6 +93,7 @@ SessionData run_commission(const TestConfig& config, const SessionOptions& optio
   data.trace = seq.loop().trace();
   data.max_abs_deviation_pct = seq.loop().max_abs_deviation_pct();
   data.test_time_s = seq.loop().t_s();
+  data.loop_timing = seq.loop().timing().summary();
   data.wall_time_s =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
   if (data.outcome.empty()) {

@@ -72,6 +72,7 @@ struct SessionData {
   double max_abs_deviation_pct = 0.0;
   double test_time_s = 0.0;  // plant/test time
   double wall_time_s = 0.0;
+  std::optional<LoopTimingSummary> loop_timing;  // when the tick loop ran
   int exit_code = kExitPass;
   std::string outcome;  // one line
 };

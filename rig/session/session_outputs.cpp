@@ -94,6 +94,33 @@ json config_json(const TestConfig& c) {
                        {"phase_tol_deg", c.compare.phase_tol_deg}}}};
 }
 
+// Realtime: lateness of each cycle's start against its schedule and overruns; lockstep: the
+// wall time per exchange (docs/test-file.md, `loop_timing`).
+json loop_timing_json(const std::optional<LoopTimingSummary>& t) {
+  if (!t) return nullptr;
+  json j = {{"mode", t->mode},
+            {"period_ms", t->period_ms},
+            {"cycles", t->cycles},
+            {"exchange_p50_ms", t->exchange_p50_ms},
+            {"exchange_p99_ms", t->exchange_p99_ms},
+            {"exchange_max_ms", t->exchange_max_ms},
+            {"exchange_mean_ms", t->exchange_mean_ms},
+            {"histogram", {{"of", t->mode == "realtime" ? "jitter" : "exchange"},
+                           {"bin_ms", t->histogram.bin_ms},
+                           {"counts", t->histogram.counts}}}};
+  if (t->mode == "realtime") {
+    j["jitter_p50_ms"] = t->jitter_p50_ms;
+    j["jitter_p99_ms"] = t->jitter_p99_ms;
+    j["jitter_max_ms"] = t->jitter_max_ms;
+    j["jitter_mean_ms"] = t->jitter_mean_ms;
+    j["overruns"] = t->overruns;
+    j["realtime_priority"] = t->realtime_priority;
+    j["slips"] = t->slips;
+    j["slip_total_ms"] = t->slip_total_ms;
+  }
+  return j;
+}
+
 }  // namespace
 
 json report_json(const SessionData& d) {
@@ -147,6 +174,7 @@ json report_json(const SessionData& d) {
   for (const auto& e : d.events) events.push_back({{"t_s", e.t_s}, {"kind", e.kind}, {"text", e.text}});
   j["events"] = events;
   j["timing"] = {{"test_time_s", d.test_time_s}, {"wall_time_s", d.wall_time_s}};
+  j["loop_timing"] = loop_timing_json(d.loop_timing);
   return j;
 }
 

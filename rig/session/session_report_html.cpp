@@ -24,6 +24,22 @@ report::Tone tone_for(int exit_code) {
   return report::Tone::kFatal;
 }
 
+std::string loop_timing_text(const LoopTimingSummary& t) {
+  const std::string exchange =
+      fmt::format("exchange p50 {:.2f} ms, p99 {:.2f} ms, max {:.2f} ms", t.exchange_p50_ms,
+                  t.exchange_p99_ms, t.exchange_max_ms);
+  if (t.mode != "realtime") {
+    return fmt::format("lockstep, {} exchanges of {:.1f} ms plant time; {}", t.cycles,
+                       t.period_ms, exchange);
+  }
+  return fmt::format("realtime at {:.0f} Hz: cycle start late by p50 {:.3f} ms, p99 {:.3f} ms, "
+                     "max {:.2f} ms; {} overruns in {} cycles, schedule moved {} times by {:.0f} ms in "
+                     "all ({}); {}",
+                     1e3 / t.period_ms, t.jitter_p50_ms, t.jitter_p99_ms, t.jitter_max_ms,
+                     t.overruns, t.cycles, t.slips, t.slip_total_ms, t.realtime_priority ? "SCHED_FIFO" : "normal priority",
+                     exchange);
+}
+
 void summary(report::HtmlReport& page, const SessionData& d) {
   page.note(tone_for(d.exit_code), fmt::format("exit code {}: {}", d.exit_code, d.outcome));
   std::vector<std::pair<std::string, std::string>> kv = {
@@ -57,6 +73,9 @@ void summary(report::HtmlReport& page, const SessionData& d) {
   }
   if (d.compare_sweep) kv.push_back({"MMFM vs swept sine", d.compare_sweep->summary});
   if (d.compare_h1) kv.push_back({"MMFM vs H1", d.compare_h1->summary});
+  if (d.loop_timing && d.loop_timing->cycles > 0) {
+    kv.push_back({"loop timing", loop_timing_text(*d.loop_timing)});
+  }
   if (d.trip) kv.push_back({"trip", fmt::format("{}: {}", to_string(d.trip->cause), d.trip->text)});
   page.section("Summary").key_values(kv);
 }
@@ -196,6 +215,28 @@ void deviation(report::HtmlReport& page, const SessionData& d) {
   if (!t.rows.empty()) page.table(t);
 }
 
+// Histogram (log counts: the tail matters) and the largest value of every second.
+void loop_timing(report::HtmlReport& page, const SessionData& d) {
+  if (!d.loop_timing || d.loop_timing->cycles == 0) return;
+  const LoopTimingSummary& t = *d.loop_timing;
+  const bool rt = t.mode == "realtime";
+  const std::string what = rt ? "cycle start lateness (ms)" : "exchange wall time (ms)";
+  page.section("Loop timing").paragraph(loop_timing_text(t));
+  report::Chart h{rt ? "Lateness of the cycle start against the schedule" : "Wall time per exchange",
+                  what, "cycles", {}, {}, {}, false, true, 240};
+  report::Series counts{"cycles", {}, "", false, true, 1.5};
+  for (std::size_t i = 0; i < t.histogram.counts.size(); ++i) {
+    h.x.push_back((static_cast<double>(i) + 0.5) * t.histogram.bin_ms);
+    counts.y.push_back(t.histogram.counts[i] > 0.0 ? t.histogram.counts[i] : kNaN);
+  }
+  h.series = {counts};
+  if (!h.x.empty()) page.chart(h);
+  report::Chart s{"Largest " + what + " in each second", "test time (s)", "ms", t.second_t_s,
+                  {}, {}, false, false, 220};
+  s.series = {{"max", t.second_max_ms, "", false, false, 1.0}};
+  if (!s.x.empty()) page.chart(s);
+}
+
 }  // namespace
 
 void write_report_html(const SessionData& d, const std::filesystem::path& path) {
@@ -205,6 +246,7 @@ void write_report_html(const SessionData& d, const std::filesystem::path& path) 
   correlations(page, d);
   convergence(page, d);
   deviation(page, d);
+  loop_timing(page, d);
   page.write(path);
 }
 

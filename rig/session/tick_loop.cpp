@@ -2,6 +2,10 @@
 
 #include <fmt/format.h>
 
+#include <pthread.h>
+#include <sched.h>
+
+#include <algorithm>
 #include <cmath>
 #include <thread>
 
@@ -33,8 +37,27 @@ TickLoop::TickLoop(drivers::GovernorLink& link, const TestConfig& config,
       view_(view),
       abort_(abort),
       dt_s_(1.0 / config.link.sample_rate_hz),
-      start_(std::chrono::steady_clock::now()) {
+      start_(std::chrono::steady_clock::now()),
+      timer_(config.link.lockstep_ticks == 0, 1.0 / config.link.sample_rate_hz) {
   status_.band_pct = config.safety.band_pct;
+}
+
+namespace {
+// Realtime: the wait for the due time and the exchange run under SCHED_FIFO when the process
+// may use it (root or CAP_SYS_NICE), so that other work on the machine does not delay the
+// wake-ups; below a co-located plant simulator's priority (50). The processing between
+// exchanges (estimates taking tens of ms) runs at normal priority again, so that it cannot
+// starve the link's or the plant's other threads. Without the permission: normal scheduling
+// throughout; the report says which.
+bool set_fifo(bool on) {
+  sched_param param{};
+  if (on) param.sched_priority = std::min(40, sched_get_priority_max(SCHED_FIFO));
+  return pthread_setschedparam(pthread_self(), on ? SCHED_FIFO : SCHED_OTHER, &param) == 0;
+}
+}  // namespace
+
+TickLoop::~TickLoop() {
+  if (fifo_) set_fifo(false);
 }
 
 void TickLoop::set_phase(Phase phase) {
@@ -53,13 +76,42 @@ bool TickLoop::link_gone() const {
   return failures_ > static_cast<int>(config_.link.sample_rate_hz);
 }
 
-// Realtime: one exchange per sample period on the monotonic clock. Lockstep: as fast as the
-// plant answers (the plant's clock only moves on advance()).
+// Realtime: one exchange per sample period on the monotonic clock, tick k due at
+// t0 + k dt + slip (t0: the first tick). A cycle late by less than a period is caught up by
+// the next one. A cycle late by more (a long estimate, a link hiccup) moves the schedule
+// (slip += lateness) instead of following it with back-to-back exchanges, which would read
+// the plant faster than it ticks (a stale-sample trip) and crowd samples of one plant state.
+// Lockstep: as fast as the plant answers (the plant's clock only moves on advance()).
 void TickLoop::pace() {
-  if (config_.link.lockstep_ticks > 0) return;
-  const auto due = start_ + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+  using Clock = std::chrono::steady_clock;
+  if (config_.link.lockstep_ticks > 0) {
+    cycle_start_ = Clock::now();
+    timer_.start(t_s(), 0.0, false);
+    return;
+  }
+  if (ticks_ == 0) {
+    fifo_ = set_fifo(true);
+    timer_.set_realtime_priority(fifo_);
+    start_ = Clock::now();
+  } else if (fifo_) {
+    set_fifo(true);
+  }
+  const auto due = start_ + std::chrono::duration_cast<Clock::duration>(
                                 std::chrono::duration<double>(t_s()));
+  const auto arrived = Clock::now();
+  const bool overrun = ticks_ > 0 && arrived >= due;  // no time left to sleep
   std::this_thread::sleep_until(due);
+  cycle_start_ = Clock::now();
+  const double late_s = std::chrono::duration<double>(cycle_start_ - due).count();
+  const bool slip = late_s > dt_s_;
+  if (slip) start_ += cycle_start_ - due;
+  timer_.start(t_s(), late_s, overrun, slip);
+}
+
+void TickLoop::exchanged() {
+  const auto now = std::chrono::steady_clock::now();
+  if (fifo_) set_fifo(false);
+  timer_.exchange(std::chrono::duration<double>(now - cycle_start_).count());
 }
 
 drivers::LinkResult<drivers::Sample> TickLoop::exchange_read() {
@@ -75,6 +127,7 @@ TickResult TickLoop::observe() {
   TickResult r;
   r.t_s = t_s();
   auto read = exchange_read();
+  exchanged();
   if (read) {
     failures_ = 0;
     r.sample = read.value();
@@ -93,6 +146,7 @@ TickResult TickLoop::prime() {
   r.t_s = t_s();
   auto written = link_.write(0.0);
   auto read = exchange_read();
+  exchanged();
   if (read && written) {
     failures_ = 0;
   } else {
@@ -126,6 +180,7 @@ TickResult TickLoop::supervised(Supervisor& sup, double request_pct) {
     if (!sup.tripped()) sup.trip(TripCause::kLinkError, written.error().message());
   }
   auto read = exchange_read();
+  exchanged();
   if (read && ok) {
     failures_ = 0;
   } else {

@@ -11,6 +11,7 @@
 
 #include "drivers/governor_link.hpp"
 #include "rig/io/recording_writer.hpp"
+#include "rig/session/loop_timing.hpp"
 #include "rig/session/live_view.hpp"
 #include "rig/session/supervisor.hpp"
 #include "rig/session/test_config.hpp"
@@ -40,6 +41,9 @@ class TickLoop {
  public:
   TickLoop(drivers::GovernorLink& link, const TestConfig& config, io::RecordingWriter& recorder,
            LiveView& view, const std::atomic<bool>* abort);
+  ~TickLoop();  // back to normal scheduling when the realtime loop raised it
+  TickLoop(const TickLoop&) = delete;
+  TickLoop& operator=(const TickLoop&) = delete;
 
   // Steady phase: advance (lockstep) and read; nothing is written to the governor.
   TickResult observe();
@@ -67,10 +71,15 @@ class TickLoop {
   const Trace& trace() const { return trace_; }
   void set_p0(double p0_kw) { p0_kw_ = p0_kw; }
   double max_abs_deviation_pct() const { return max_dev_pct_; }
+  // Cycle timing: lateness against the schedule (realtime) and exchange wall time.
+  const LoopTimer& timing() const { return timer_; }
 
  private:
   drivers::LinkResult<drivers::Sample> exchange_read();
+  // Waits for this tick's due time (realtime) and starts its cycle timing.
   void pace();
+  // Ends the cycle's exchange timing (after the read).
+  void exchanged();
   void record(const drivers::Sample& s, double u_pct, double request_pct);
 
   drivers::GovernorLink& link_;
@@ -85,6 +94,9 @@ class TickLoop {
   int failures_ = 0;
   std::optional<drivers::LinkResult<drivers::Sample>> last_read_;
   std::chrono::steady_clock::time_point start_;
+  std::chrono::steady_clock::time_point cycle_start_;
+  LoopTimer timer_;
+  bool fifo_ = false;
   LiveStatus status_;
   Trace trace_;
   double p0_kw_ = 0.0;
