@@ -13,6 +13,7 @@
 
 #include "rig/cli/commands.hpp"
 #include "rig/cli/identify_report.hpp"
+#include "rig/cli/identify_rows.hpp"
 #include "rig/report/json_out.hpp"
 
 namespace rig::cli {
@@ -26,6 +27,7 @@ struct IdentifyArgs {
   int lags = 0;  // 0: min(256, samples / 8)
   int skip = 1;
   double estimation_fraction = 0.5;
+  std::string rows = "auto";  // auto | all | excitation (identify_rows.hpp)
   std::string out;
   bool json = false;
 };
@@ -125,7 +127,8 @@ signal::CorrelatorOptions correlator_options(const IdentifyArgs& a, const io::Re
 
 // Sidecar "coupled_columns" name AC-coupled channels; a channel X_ac with its raw source X
 // in the same recording lets the quality check measure each network's time constant.
-std::vector<ident::CoupledPair> coupled_pairs(const IdentifyArgs& a, const io::Recording& rec) {
+std::vector<ident::CoupledPair> coupled_pairs(const IdentifyArgs& a, const io::Recording& rec,
+                                              const RowSelection& rows) {
   std::vector<ident::CoupledPair> pairs;
   for (const std::string& name : rec.sidecar.coupled_columns) {
     const std::string suffix = "_ac";
@@ -135,10 +138,11 @@ std::vector<ident::CoupledPair> coupled_pairs(const IdentifyArgs& a, const io::R
     io::ReadOptions ro;
     ro.columns = {name.substr(0, name.size() - suffix.size()), name};
     ro.dt_s = rec.dt_s;
-    ro.min_rows = rec.rows();
+    ro.min_rows = rows.total;
     try {
       const io::Recording both = io::read_recording(a.recording, ro);
-      pairs.push_back({name, both.columns[0], both.columns[1]});
+      pairs.push_back({name, both.columns[0].segment(rows.first, rows.count),
+                       both.columns[1].segment(rows.first, rows.count)});
     } catch (const io::InputError&) {
       // No raw source in the recording: the network cannot be measured, nothing to compare.
     }
@@ -168,7 +172,14 @@ void emit(const IdentifyArgs& a, const nlohmann::json& rep, const std::string& s
 int run_identify(const IdentifyArgs& a) {
   IdentifyContext ctx;
   std::string in, out;
-  const io::Recording rec = load_recording(a, in, out);
+  const io::Recording whole = load_recording(a, in, out);
+  ctx.rows = select_rows(a.recording, whole, a.rows);
+  const io::Recording rec = slice_rows(whole, ctx.rows);
+  if (rec.rows() < kMinSamples) {
+    throw io::InputError(rec.source, 0, "", fmt::format("expected at least {} rows, the selection "
+                                                        "({}) holds {}", kMinSamples,
+                                                        ctx.rows.reason, rec.rows()));
+  }
   ctx.recording = &rec;
   ctx.input = in;
   ctx.output = out;
@@ -183,7 +194,7 @@ int run_identify(const IdentifyArgs& a) {
   require_excitation(rec, in, u);
   ctx.correlator = correlator_options(a, rec);
   ident::QualityOptions qo = quality_options(rec, ctx.correlator, order, !delay);
-  qo.coupled_pairs = coupled_pairs(a, rec);
+  qo.coupled_pairs = coupled_pairs(a, rec, ctx.rows);
   const ident::QualityReport quality = ident::check_quality(u, y, rec.dt_s, qo);
   std::filesystem::create_directories(a.out);
   const std::filesystem::path dir(a.out);
@@ -236,6 +247,10 @@ void add_identify_command(CLI::App& app) {
   cmd->add_option("--estimation-fraction", a->estimation_fraction,
                   "Share of the record used for estimation; the rest validates")
       ->check(CLI::Range(0.2, 0.8))->default_str("0.5");
+  cmd->add_option("--rows", a->rows,
+                  "Rows to use: auto (a rig commission recording's excitation phase, else all), "
+                  "all, or excitation")
+      ->default_str("auto");
   cmd->add_option("--out", a->out, "Output folder")->required();
   cmd->add_flag("--json", a->json, "Print report.json on stdout instead of the summary");
   cmd->callback([a] {

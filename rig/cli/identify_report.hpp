@@ -7,6 +7,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "rig/cli/identify_rows.hpp"
 #include "rig/ident/identify.hpp"
 #include "rig/ident/quality.hpp"
 #include "rig/io/model_file.hpp"
@@ -24,6 +25,7 @@ struct IdentifyContext {
   std::string delay_arg;      // "auto" | seconds
   signal::CorrelatorOptions correlator;  // as used (dt_s set)
   double estimation_fraction = 0.5;
+  RowSelection rows;  // which rows of the file `recording` holds
 };
 
 // result == nullptr: the data-quality checks stopped the run (status "data_quality_failed").

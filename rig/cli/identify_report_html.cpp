@@ -154,6 +154,7 @@ void write_identify_html(const std::filesystem::path& path, const IdentifyContex
   HtmlReport page("rig identify: " + rec.source);
   page.key_values({{"recording", rec.source},
                    {"samples", fmt::format("{} at {:.6g} s ({})", rec.rows(), rec.dt_s, rec.sampling.dt_source)},
+                   {"rows", ctx.rows.reason},
                    {"input / output", ctx.input + " / " + ctx.output},
                    {"method", ctx.method + ", order " + ctx.order_arg + ", delay " + ctx.delay_arg},
                    {"result", r ? fmt::format("validation fit {:.1f} % (order {}/{})", r->validation_fit_pct,
@@ -172,6 +173,7 @@ std::string identify_summary(const IdentifyContext& ctx, const ident::QualityRep
   const io::Recording& rec = *ctx.recording;
   std::string s = fmt::format("rig identify: {} ({} samples, dt {:.6g} s, {} -> {})\n", rec.source,
                               rec.rows(), rec.dt_s, ctx.input, ctx.output);
+  s += "  rows: " + ctx.rows.reason + "\n";
   for (const auto& w : rec.warnings) s += "  warning: " + w + "\n";
   for (const auto& f : quality.flags) s += fmt::format("  {}: {}\n", ident::to_string(f.severity), f.message);
   if (r) {

@@ -22,6 +22,12 @@ json recording_json(const IdentifyContext& ctx) {
             {"jitter_rms_s", rec.sampling.jitter_rms_s},
             {"uniform_sampling", rec.sampling.uniform},
             {"warnings", rec.warnings}};
+  j["rows_used"] = {{"selection", ctx.rows.mode},
+                    {"first_row", ctx.rows.first + 1},
+                    {"count", ctx.rows.count},
+                    {"of", ctx.rows.total},
+                    {"phase_code", ctx.rows.phase_code ? json(*ctx.rows.phase_code) : json(nullptr)},
+                    {"reason", ctx.rows.reason}};
   j["sidecar"] = rec.sidecar.present ? io::to_json(rec.sidecar) : json(nullptr);
   return j;
 }
