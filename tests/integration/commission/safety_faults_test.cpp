@@ -279,6 +279,57 @@ std::optional<GovernorView> read_governor(modbus_t* ctx) {
   return GovernorView{static_cast<std::int16_t>(in[5]) * 0.001, in[6]};
 }
 
+// The interface faults as a plain Modbus client sees them, in lockstep at 1 ms ticks:
+// counter frozen from t = 0.05 s while plant time runs on, power INT32_MIN from 0.1 s, every
+// connection closed after the request that reaches 0.15 s.
+TEST(SafetyFaults, ServeFaultsSeenByAPlainModbusClient) {
+  const auto dir = fresh_dir("safety-serve");
+  const pid_t plant =
+      spawn({(bin_dir() / "plantsim").string(), "--clock", "lockstep", "--modbus",
+             "tcp://127.0.0.1:0", "--fault", "serve.freeze_counter=1@t=0.05", "--fault",
+             "serve.nan_power=1@t=0.1", "--fault", "serve.drop_link=1@t=0.15"},
+            dir / "plantsim.log");
+  ASSERT_GT(plant, 0);
+  const std::regex ready("modbus tcp://127\\.0\\.0\\.1:([0-9]+) ready");
+  int port = 0;
+  for (int i = 0; i < 100 && port == 0; ++i) {
+    std::smatch m;
+    const std::string text = read_text(dir / "plantsim.log");
+    if (std::regex_search(text, m, ready)) port = std::stoi(m[1].str());
+    std::this_thread::sleep_for(50ms);
+  }
+  ASSERT_GT(port, 0) << read_text(dir / "plantsim.log");
+  modbus_t* ctx = modbus_new_tcp("127.0.0.1", port);
+  ASSERT_EQ(modbus_connect(ctx), 0);
+  int answered = 0;
+  for (int k = 1; k <= 20; ++k) {  // 10 ticks per step: plant time 0.01 .. 0.2 s
+    std::uint16_t in[10] = {};
+    const std::uint16_t ten = 10;
+    if (modbus_write_registers(ctx, 100, 1, &ten) != 1 ||
+        modbus_read_input_registers(ctx, 0, 10, in) != 10) {
+      std::printf("  request %d failed: %s\n", k, modbus_strerror(errno));
+      break;
+    }
+    ++answered;
+    const std::uint32_t time_ms = (std::uint32_t{in[7]} << 16) | in[8];
+    const auto power_w = static_cast<std::int32_t>((std::uint32_t{in[0]} << 16) | in[1]);
+    EXPECT_EQ(time_ms, 10u * k);
+    EXPECT_EQ(in[9], std::min(10 * k, 50)) << "counter at " << time_ms << " ms";
+    if (time_ms < 100) {
+      EXPECT_GT(power_w, 3'000'000) << time_ms << " ms";
+    } else {
+      EXPECT_EQ(power_w, INT32_MIN) << time_ms << " ms";
+    }
+  }
+  EXPECT_EQ(answered, 14) << "link not dropped after the request that reached 0.15 s";
+  modbus_close(ctx);
+  std::this_thread::sleep_for(100ms);  // the listener closes right after the connections
+  EXPECT_NE(modbus_connect(ctx), 0) << "listener still open after the drop";
+  modbus_free(ctx);
+  kill(plant, SIGTERM);
+  waitpid(plant, nullptr, 0);
+}
+
 TEST(SafetyFaults, KilledRealtimeRigLosesTheBiasWithin500msPlusOneTick) {
   const auto dir = fresh_dir("safety-heartbeat");
   const pid_t plant = spawn({(bin_dir() / "plantsim").string(), "--preset", "stornoway", "--seed",
