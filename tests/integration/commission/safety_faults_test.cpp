@@ -268,6 +268,18 @@ pid_t spawn(const std::vector<std::string>& args, const std::filesystem::path& l
   return rc == 0 ? pid : -1;
 }
 
+// The Modbus TCP port plantsim announces in its log ("modbus tcp://127.0.0.1:PORT ready").
+int announced_port(const std::filesystem::path& log) {
+  const std::regex ready("modbus tcp://127\\.0\\.0\\.1:([0-9]+) ready");
+  for (int i = 0; i < 100; ++i) {
+    std::smatch m;
+    const std::string text = read_text(log);
+    if (std::regex_search(text, m, ready)) return std::stoi(m[1].str());
+    std::this_thread::sleep_for(50ms);
+  }
+  return 0;
+}
+
 // Input registers 0-9 over an independent libmodbus connection; nullopt when the read failed.
 struct GovernorView {
   double bias_echo_pct = 0.0;
@@ -290,14 +302,7 @@ TEST(SafetyFaults, ServeFaultsSeenByAPlainModbusClient) {
              "serve.nan_power=1@t=0.1", "--fault", "serve.drop_link=1@t=0.15"},
             dir / "plantsim.log");
   ASSERT_GT(plant, 0);
-  const std::regex ready("modbus tcp://127\\.0\\.0\\.1:([0-9]+) ready");
-  int port = 0;
-  for (int i = 0; i < 100 && port == 0; ++i) {
-    std::smatch m;
-    const std::string text = read_text(dir / "plantsim.log");
-    if (std::regex_search(text, m, ready)) port = std::stoi(m[1].str());
-    std::this_thread::sleep_for(50ms);
-  }
+  const int port = announced_port(dir / "plantsim.log");
   ASSERT_GT(port, 0) << read_text(dir / "plantsim.log");
   modbus_t* ctx = modbus_new_tcp("127.0.0.1", port);
   ASSERT_EQ(modbus_connect(ctx), 0);
@@ -336,14 +341,7 @@ TEST(SafetyFaults, KilledRealtimeRigLosesTheBiasWithin500msPlusOneTick) {
                              "3", "--clock", "realtime", "--modbus", "tcp://127.0.0.1:0"},
                             dir / "plantsim.log");
   ASSERT_GT(plant, 0);
-  const std::regex ready("modbus tcp://127\\.0\\.0\\.1:([0-9]+) ready");
-  int port = 0;
-  for (int i = 0; i < 100 && port == 0; ++i) {
-    std::smatch m;
-    const std::string text = read_text(dir / "plantsim.log");
-    if (std::regex_search(text, m, ready)) port = std::stoi(m[1].str());
-    std::this_thread::sleep_for(50ms);
-  }
+  const int port = announced_port(dir / "plantsim.log");
   ASSERT_GT(port, 0) << read_text(dir / "plantsim.log");
   std::ofstream(dir / "rt.toml")
       << "[steady_state]\nduration_s = 3.0\n[pilot]\nduration_s = 20.0\n";
