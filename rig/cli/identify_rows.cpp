@@ -92,9 +92,10 @@ RowSelection select_rows(const std::filesystem::path& path, const io::Recording&
   s.mode = "excitation";
   s.first = best_first;
   s.count = best_count;
-  s.reason = fmt::format("excitation phase only (phase = {}): rows {}-{} of {}, the longest "
-                         "contiguous run; --rows all uses every row",
-                         code, best_first + 1, best_first + best_count, s.total);
+  s.reason = fmt::format(
+      "excitation phase only (phase = {}): rows {}-{} of {}, the longest "
+      "contiguous run; --rows all uses every row",
+      code, best_first + 1, best_first + best_count, s.total);
   return s;
 }
 

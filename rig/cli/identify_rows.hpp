@@ -21,7 +21,7 @@ struct RowSelection {
   std::string reason;        // one sentence for the summary and the reports
   Eigen::Index first = 0;    // 0-based data row
   Eigen::Index count = 0;
-  Eigen::Index total = 0;    // data rows in the file
+  Eigen::Index total = 0;         // data rows in the file
   std::optional<int> phase_code;  // the excitation code, when the recording has phases
 };
 

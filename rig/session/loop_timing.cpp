@@ -75,7 +75,9 @@ void LoopTimer::start(double t_s, double lateness_s, bool overrun, bool slip) {
   }
 }
 
-void LoopTimer::exchange(double wall_s) { exchange_ms_.push_back(static_cast<float>(1e3 * wall_s)); }
+void LoopTimer::exchange(double wall_s) {
+  exchange_ms_.push_back(static_cast<float>(1e3 * wall_s));
+}
 
 LoopTimingSummary LoopTimer::summary() const {
   LoopTimingSummary s;

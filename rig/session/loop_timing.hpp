@@ -22,14 +22,14 @@ struct TimingHistogram {
 };
 
 struct LoopTimingSummary {
-  std::string mode;         // "realtime" or "lockstep"
-  double period_ms = 0.0;   // scheduled period (realtime) or plant time per exchange (lockstep)
+  std::string mode;        // "realtime" or "lockstep"
+  double period_ms = 0.0;  // scheduled period (realtime) or plant time per exchange (lockstep)
   std::size_t cycles = 0;
   // Realtime only: lateness of the cycle start against its schedule.
   double jitter_p50_ms = 0.0, jitter_p99_ms = 0.0, jitter_max_ms = 0.0, jitter_mean_ms = 0.0;
   std::size_t overruns = 0;
-  std::size_t slips = 0;        // cycles late by more than a period: the schedule moved
-  double slip_total_ms = 0.0;   // by this much in all
+  std::size_t slips = 0;           // cycles late by more than a period: the schedule moved
+  double slip_total_ms = 0.0;      // by this much in all
   bool realtime_priority = false;  // the tick loop ran under SCHED_FIFO
   // Both modes: wall time from the cycle start to the end of the read.
   double exchange_p50_ms = 0.0, exchange_p99_ms = 0.0, exchange_max_ms = 0.0;

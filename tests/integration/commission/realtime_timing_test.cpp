@@ -2,9 +2,8 @@
 // clock against plantsim integrating in wall time. The report must carry the loop timing
 // (lateness of each cycle start against its schedule), and at 100 Hz the 99th percentile of
 // that lateness must stay well inside the 10 ms period (< 5 ms).
-#include <gtest/gtest.h>
-
 #include <fmt/format.h>
+#include <gtest/gtest.h>
 
 #include <fstream>
 
@@ -42,12 +41,13 @@ TEST(RealtimeTiming, ReportCarriesLoopTimingWithP99Below5ms) {
   const double p50 = t["jitter_p50_ms"], p99 = t["jitter_p99_ms"], max = t["jitter_max_ms"];
   const double test_time_s = report["timing"]["test_time_s"];
   const std::size_t cycles = t["cycles"], overruns = t["overruns"];
-  fmt::print("realtime loop at 100 Hz: {} cycles, cycle start late by p50 {:.3f} ms, p99 {:.3f} "
-             "ms, max {:.3f} ms, {} overruns, SCHED_FIFO {}; exchange p50 {:.3f} ms, p99 {:.3f} "
-             "ms, max {:.3f} ms\n",
-             cycles, p50, p99, max, overruns, t["realtime_priority"].get<bool>(),
-             t["exchange_p50_ms"].get<double>(), t["exchange_p99_ms"].get<double>(),
-             t["exchange_max_ms"].get<double>());
+  fmt::print(
+      "realtime loop at 100 Hz: {} cycles, cycle start late by p50 {:.3f} ms, p99 {:.3f} "
+      "ms, max {:.3f} ms, {} overruns, SCHED_FIFO {}; exchange p50 {:.3f} ms, p99 {:.3f} "
+      "ms, max {:.3f} ms\n",
+      cycles, p50, p99, max, overruns, t["realtime_priority"].get<bool>(),
+      t["exchange_p50_ms"].get<double>(), t["exchange_p99_ms"].get<double>(),
+      t["exchange_max_ms"].get<double>());
   EXPECT_EQ(t["mode"], "realtime");
   EXPECT_DOUBLE_EQ(t["period_ms"].get<double>(), 10.0);
   EXPECT_EQ(report["config"]["lockstep_ticks"], 0) << "the plant must run on its own clock";
@@ -73,16 +73,16 @@ TEST(RealtimeTiming, LockstepRecordsTheWallTimePerExchange) {
   const auto out = fresh_dir("lockstep-timing");
   const auto test = out / "ls.toml";
   std::ofstream(test) << kShortRealtimeProfile;
-  const int code = run_rig(
-      fmt::format("commission --emulate --test {} --quiet --out {}", test.string(),
-                  (out / "run").string()),
-      out / "rig.log");
+  const int code = run_rig(fmt::format("commission --emulate --test {} --quiet --out {}",
+                                       test.string(), (out / "run").string()),
+                           out / "rig.log");
   ASSERT_EQ(code, 0) << read_text(out / "rig.log");
   const auto t = read_json(out / "run/report.json")["loop_timing"];
-  fmt::print("lockstep: {} exchanges, wall time per exchange p50 {:.3f} ms, p99 {:.3f} ms, max "
-             "{:.3f} ms\n",
-             t["cycles"].get<std::size_t>(), t["exchange_p50_ms"].get<double>(),
-             t["exchange_p99_ms"].get<double>(), t["exchange_max_ms"].get<double>());
+  fmt::print(
+      "lockstep: {} exchanges, wall time per exchange p50 {:.3f} ms, p99 {:.3f} ms, max "
+      "{:.3f} ms\n",
+      t["cycles"].get<std::size_t>(), t["exchange_p50_ms"].get<double>(),
+      t["exchange_p99_ms"].get<double>(), t["exchange_max_ms"].get<double>());
   EXPECT_EQ(t["mode"], "lockstep");
   EXPECT_FALSE(t.contains("jitter_p99_ms"));
   EXPECT_GT(t["exchange_p50_ms"].get<double>(), 0.0);

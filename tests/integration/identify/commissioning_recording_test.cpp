@@ -2,9 +2,8 @@
 // phase (the longest contiguous run of phase = 2 rows) is identified, which recovers the
 // Stornoway electromechanical mode (2.03 Hz, plantsim/presets/stornoway.tf.json); and a
 // recording cut mid-line, as a killed rig leaves it, is still accepted.
-#include <gtest/gtest.h>
-
 #include <fmt/format.h>
+#include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cmath>
@@ -35,9 +34,10 @@ const std::filesystem::path& commissioning_dir() {
   static const std::filesystem::path dir = [] {
     const auto d = scratch("commissioning");
     std::ofstream(d / "test.toml") << kProfile;
-    const RunResult r = run_rig(fmt::format("commission --emulate --seed 3 --quiet --test {} --out {}",
-                                            (d / "test.toml").string(), (d / "run").string()),
-                                d);
+    const RunResult r =
+        run_rig(fmt::format("commission --emulate --seed 3 --quiet --test {} --out {}",
+                            (d / "test.toml").string(), (d / "run").string()),
+                d);
     EXPECT_EQ(r.exit_code, 0) << r.out << r.err;
     return d / "run";
   }();
@@ -80,7 +80,8 @@ TEST(IdentifyCommissioning, ExcitationRowsGiveTheModeWithin3Percent) {
   EXPECT_EQ(whole["recording"]["rows_used"]["selection"], "all");
   EXPECT_EQ(whole["recording"]["rows"], rows["of"]);
   const double fn_all_hz = whole["derived"]["fn_hz"];
-  fmt::print("--rows all: fn {:.4f} Hz ({:+.2f} %)\n", fn_all_hz, 100.0 * (fn_all_hz / kModeHz - 1.0));
+  fmt::print("--rows all: fn {:.4f} Hz ({:+.2f} %)\n", fn_all_hz,
+             100.0 * (fn_all_hz / kModeHz - 1.0));
   EXPECT_GT(std::abs(fn_all_hz - kModeHz), std::abs(fn_hz - kModeHz));
 }
 
@@ -106,10 +107,12 @@ TEST(IdentifyCommissioning, RecordingCutMidLineIsAccepted) {
   EXPECT_EQ(rep["recording"]["rows_used"]["selection"], "excitation");
   const double fn_hz = rep["derived"]["fn_hz"];
   fmt::print("cut recording: {} warning(s), first: {}; fn {:.4f} Hz from {} excitation rows\n",
-             rep["recording"]["warnings"].size(), rep["recording"]["warnings"][0].get<std::string>(),
-             fn_hz, rep["recording"]["rows_used"]["count"].get<long>());
+             rep["recording"]["warnings"].size(),
+             rep["recording"]["warnings"][0].get<std::string>(), fn_hz,
+             rep["recording"]["rows_used"]["count"].get<long>());
   // Every complete row is kept (header and the partial row are not data).
-  const auto complete_lines = std::count(text.begin(), text.begin() + static_cast<long>(line_start), '\n');
+  const auto complete_lines =
+      std::count(text.begin(), text.begin() + static_cast<long>(line_start), '\n');
   EXPECT_EQ(rep["recording"]["rows_used"]["of"].get<long>(), complete_lines - 1);
   EXPECT_TRUE(std::isfinite(fn_hz) && fn_hz > 0.0);
   EXPECT_TRUE(std::filesystem::exists(work / "out/model.json"));
