@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 #include <signal.h>
 
+#include <algorithm>
 #include <atomic>
 #include <cmath>
 #include <memory>
@@ -29,6 +30,7 @@ void install_abort_handler() {
 
 // plantsim ticks every 1 ms (its default --tick).
 constexpr double kPlantTickS = 1e-3;
+constexpr double kLockstepMinTimeoutS = 5.0;
 
 void print_summary(const session::SessionData& d, const std::filesystem::path& out) {
   fmt::print("rig {}: {}\n", d.command, d.outcome);
@@ -64,9 +66,15 @@ session::TestConfig load_config(const SessionArgs& args, const std::string& /*co
             "--clock realtime: {} sets link.lockstep_ticks = {}; remove it or use --clock "
             "lockstep", c.source, c.link.lockstep_ticks));
       }
-    } else if (c.link.lockstep_ticks == 0) {
-      c.link.lockstep_ticks =
-          static_cast<int>(std::lround(1.0 / (c.link.sample_rate_hz * kPlantTickS)));
+    } else {
+      if (c.link.lockstep_ticks == 0) {
+        c.link.lockstep_ticks =
+            static_cast<int>(std::lround(1.0 / (c.link.sample_rate_hz * kPlantTickS)));
+      }
+      // A lockstep plant moves only when told, so a slow answer costs nothing but wall time;
+      // the timeout then only has to catch a dead or hung plantsim, not a stalled governor.
+      // A short one made busy machines (the RTU link relays through socat) fail spuriously.
+      c.link.timeout_s = std::max(c.link.timeout_s, kLockstepMinTimeoutS);
     }
     if (c.plant.preset.empty()) c.plant.preset = args.preset;
     session::validate(c);
