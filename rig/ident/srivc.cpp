@@ -5,6 +5,7 @@
 #include <cmath>
 #include <limits>
 #include <stdexcept>
+#include <string>
 
 #include <Eigen/LU>
 #include <Eigen/QR>
@@ -25,6 +26,7 @@ Eigen::VectorXd svf_denominator(int n, double lambda) {
 
 // Reflect right-half-plane roots so the prefilter 1/A stays stable.
 Eigen::VectorXd stabilised(const Eigen::VectorXd& den) {
+  if (!den.allFinite()) return {};  // caller treats an empty result as a failed iterate
   TransferFunction tf{Eigen::VectorXd::Ones(1), den, 0.0};
   const Eigen::VectorXcd p = tf.poles();
   bool ok = true;
@@ -62,9 +64,12 @@ IvStep iv_step(const Eigen::VectorXd& a_filter, const Eigen::VectorXd& u,
   zeta.rightCols(m + 1) = phi.rightCols(m + 1);
   const Eigen::VectorXd target = yf.col(0).tail(rows);
   const Eigen::MatrixXd zp = zeta.transpose() * phi;
+  if (!zp.allFinite()) return {};
   Eigen::FullPivLU<Eigen::MatrixXd> lu(zp);
   if (!lu.isInvertible()) return {};
-  return {lu.solve(zeta.transpose() * target), true};
+  IvStep step{lu.solve(zeta.transpose() * target), true};
+  step.ok = step.theta.allFinite();
+  return step;
 }
 
 TransferFunction tf_from(const Eigen::VectorXd& theta, ModelOrder order, double delay_s) {
@@ -101,6 +106,7 @@ FixedDelayFit srivc_fixed(const Eigen::VectorXd& u, const Eigen::VectorXd& y, do
   for (int it = 1; it <= opt.max_iterations; ++it) {
     TransferFunction tf = tf_from(theta, order, delay_s);
     tf.den = stabilised(tf.den);
+    if (tf.den.size() != order.n + 1) break;  // degenerate iterate: keep the last theta
     const Eigen::VectorXd x_hat = simulate(tf, u, dt_s);
     const IvStep next = iv_step(tf.den, u, y, &x_hat, dt_s, order, delay_s);
     fit.iterations = it;
@@ -135,6 +141,7 @@ Eigen::VectorXd initial_denominator(const Eigen::VectorXd& u, const Eigen::Vecto
     if (!st.ok) continue;
     TransferFunction tf = tf_from(st.theta, order, delay_s);
     tf.den = stabilised(tf.den);
+    if (tf.den.size() != order.n + 1) continue;
     const double sse = output_sse(tf, u, y, dt_s);
     if (sse < best_sse) best_sse = sse, best = tf.den;
   }
@@ -157,7 +164,9 @@ FixedDelayFit search_delay(const Eigen::VectorXd& u, const Eigen::VectorXd& y, d
     if (f.sse < best.sse) best = f, best_i = i;
   }
   double a = std::max(0.0, (best_i - 1) * step), b = std::min(opt.max_delay_s, (best_i + 1) * step);
-  const Eigen::VectorXd warm = best.tf.den;
+  // A start whose every fit failed has no model: warm-start from a_start instead of an
+  // empty denominator.
+  const Eigen::VectorXd warm = best.tf.den.size() == order.n + 1 ? best.tf.den : a_start;
   auto eval = [&](double td) { return srivc_fixed(u, y, dt_s, order, td, warm, quick); };
   double x1 = b - kGolden * (b - a), x2 = a + kGolden * (b - a);
   FixedDelayFit f1 = eval(x1), f2 = eval(x2);
@@ -170,6 +179,7 @@ FixedDelayFit search_delay(const Eigen::VectorXd& u, const Eigen::VectorXd& y, d
   }
   for (const FixedDelayFit* f : {&f1, &f2})
     if (f->sse < best.sse) best = *f;
+  if (!std::isfinite(best.sse)) return best;  // no stable fit at any delay
   const FixedDelayFit final_fit =
       srivc_fixed(u, y, dt_s, order, best.tf.delay_s, best.tf.den, opt);
   return final_fit.sse <= best.sse ? final_fit : best;
@@ -214,6 +224,11 @@ SrivcResult estimate_srivc(const Eigen::VectorXd& u, const Eigen::VectorXd& y, d
   const Eigen::VectorXd a0 = initial_denominator(u, y, dt_s, order, td0, opt);
   FixedDelayFit best = srivc_fixed(u, y, dt_s, order, td0, a0, opt);
   if (!opt.delay_s) best = search_delay(u, y, dt_s, order, a0, best, opt);
+  // Singular instruments or an unstable final iterate at every delay: no usable model.
+  if (!std::isfinite(best.sse))
+    throw std::invalid_argument("estimate_srivc: no stable model of order " +
+                                std::to_string(order.n) + "/" + std::to_string(order.m) +
+                                " (singular instrument matrix or unstable iterate)");
   SrivcResult res;
   res.model = best.tf;
   res.delay_s = best.tf.delay_s;

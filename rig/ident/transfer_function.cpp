@@ -100,7 +100,12 @@ Eigen::MatrixXd filtered_derivatives(const Eigen::VectorXd& den_in, const Eigen:
                                      double dt_s, double delay_s) {
   if (!(dt_s > 0.0)) throw std::invalid_argument("simulate: dt_s must be > 0");
   if (!(delay_s >= 0.0)) throw std::invalid_argument("simulate: delay_s must be >= 0");
-  const Eigen::VectorXd den = trim_leading_zeros(den_in) / trim_leading_zeros(den_in)(0);
+  // An empty, all-zero or non-finite denominator (a degenerate estimate) has no filter.
+  if (den_in.size() == 0 || !den_in.allFinite() || den_in.cwiseAbs().maxCoeff() == 0.0)
+    throw std::invalid_argument(
+        "filtered_derivatives: denominator must be non-empty, finite and not all zero");
+  const Eigen::VectorXd trimmed = trim_leading_zeros(den_in);
+  const Eigen::VectorXd den = trimmed / trimmed(0);
   const Eigen::Index n = den.size() - 1, N = u.size();
   // Delay Td = (d + f) dt: delayed input ud(t_k) = (1-f) u_{k-d} + f u_{k-d-1}.
   const double delay_samples = delay_s / dt_s;
