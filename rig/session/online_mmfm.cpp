@@ -1,6 +1,7 @@
 #include "rig/session/online_mmfm.hpp"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
@@ -74,20 +75,60 @@ std::optional<BlockEstimate> OnlineMmfm::push(double u_pct, double y_kw) {
   }
   main_.push(u_pct, y_kw);
   block_.push(u_pct, y_kw);
-  if (++in_block_ < options_.block_samples) return std::nullopt;
-  in_block_ = 0;
-  history_.push_back(refresh());
+  if (++in_block_ >= options_.block_samples) {
+    in_block_ = 0;
+    if (!pending_) pending_.emplace();
+    pending_->block = ++blocks_done_;
+    pending_->t_s = static_cast<double>(main_.samples()) * options_.correlator.dt_s;
+    pending_->ruu = main_.ruu();
+    pending_->ryu = main_.ryu();
+    pending_->blocks.emplace_back(block_.ruu(), block_.ryu());
+    if (!options_.asynchronous) {
+      const Snapshot s = std::move(*pending_);
+      pending_.reset();
+      history_.push_back(refresh(s));
+      spread_blocks_ = block_thetas_.size();
+      return history_.back();
+    }
+  }
+  if (!options_.asynchronous) return std::nullopt;
+  std::optional<BlockEstimate> done;
+  if (job_.valid() && job_.wait_for(std::chrono::seconds(0)) == std::future_status::ready) {
+    done = collect();
+  }
+  if (!job_.valid() && pending_) launch();
+  return done;
+}
+
+void OnlineMmfm::launch() {
+  job_ = std::async(std::launch::async,
+                    [this, s = std::move(*pending_)]() { return refresh(s); });
+  pending_.reset();
+}
+
+const BlockEstimate& OnlineMmfm::collect() {
+  history_.push_back(job_.get());
+  spread_blocks_ = block_thetas_.size();
   return history_.back();
 }
 
-BlockEstimate OnlineMmfm::refresh() {
+void OnlineMmfm::finish() {
+  while (job_.valid() || pending_) {
+    if (!job_.valid()) launch();
+    collect();
+  }
+}
+
+// Runs on the worker in asynchronous mode: touches only the snapshot, the per-block state
+// and the (constant) options.
+BlockEstimate OnlineMmfm::refresh(const Snapshot& s) {
   BlockEstimate e;
-  e.block = static_cast<int>(history_.size()) + 1;
-  e.t_s = static_cast<double>(main_.samples()) * options_.correlator.dt_s;
+  e.block = s.block;
+  e.t_s = s.t_s;
   e.max_rel_std_error = kNaN;
   try {
-    const ident::MmfmResult live = estimate_mmfm(main_.ruu(), main_.ryu(), mmfm_options());
-    block_corr_.emplace_back(block_.ruu(), block_.ryu());
+    const ident::MmfmResult live = estimate_mmfm(s.ruu, s.ryu, mmfm_options());
+    block_corr_.insert(block_corr_.end(), s.blocks.begin(), s.blocks.end());
     block_thetas_.clear();
     block_derived_.clear();
     for (const auto& [ruu, ryu] : block_corr_) {
@@ -143,13 +184,16 @@ void OnlineMmfm::apply_spread(std::vector<ident::ParameterEstimate>& params,
 }
 
 bool OnlineMmfm::converged() const {
-  if (history_.empty() || block_thetas_.size() < kMinSpreadBlocks) return false;
+  if (history_.empty() || spread_blocks_ < kMinSpreadBlocks) return false;
   const auto& last = history_.back();
   return last.ok && std::isfinite(last.max_rel_std_error) &&
          last.max_rel_std_error < options_.target_rel_std_error;
 }
 
 ident::MmfmResult OnlineMmfm::final_result() const {
+  if (job_.valid() || pending_) {
+    throw std::logic_error("online MMFM: final_result() before finish()");
+  }
   if (main_.blocks() == 0 && main_.samples() < options_.correlator.lags) {
     throw std::invalid_argument("online MMFM: no excitation block was completed");
   }

@@ -151,6 +151,10 @@ bool Sequencer::excite() {
   o.weight = c.mmfm.averaging_w;
   o.ac_coupling_rc_s = c.excitation.ac_coupling_rc_s;
   o.target_rel_std_error = c.mmfm.target_rel_std_error;
+  // Realtime: a block estimate (tens of ms) must not delay the next exchange, so it runs on a
+  // worker and the stopping rule sees it a few ticks later. Lockstep keeps it inside the tick
+  // so that a seed gives the same recording.
+  o.asynchronous = c.link.lockstep_ticks == 0;
   OnlineMmfm online(o);
   const long max_n = std::lround(c.mmfm.max_duration_s * rate);
   const long min_n = std::lround(c.mmfm.min_duration_s * rate);
@@ -184,6 +188,7 @@ bool Sequencer::excite() {
           }
         }
       });
+  online.finish();
   loop_.status().estimates.clear();
   data_.excitation_s = static_cast<double>(exc_u_.size()) / rate;
   data_.history = online.history();
