@@ -24,6 +24,21 @@ void check(const SweepPlanOptions& o) {
   require(o.min_integrate_cycles >= 1, "min_integrate_cycles must be >= 1");
   require(o.ramp_cycles >= 0.0 && o.ramp_cycles <= o.min_settle_cycles,
           "ramp_cycles must be in [0, min_settle_cycles]");
+  require(o.noise_rms_kw >= 0.0, "noise_rms_kw must be >= 0");
+  require(o.target_rel_std >= 0.0, "target_rel_std must be >= 0");
+  require(o.max_integrate_s >= 0.0, "max_integrate_s must be >= 0");
+}
+
+// Integration time of the noise rule: N dt = 2 sigma^2 dt / (r^2 |Y|^2), |Y| = A |G(f)|,
+// at least min_integrate_s and at most max_integrate_s (when set).
+double integrate_time_s(const SweepPlanOptions& o, double response_kw) {
+  if (!(o.noise_rms_kw > 0.0) || !(o.target_rel_std > 0.0) || !(response_kw > 0.0)) {
+    return o.min_integrate_s;
+  }
+  const double r_y = o.target_rel_std * response_kw;
+  double t_s = 2.0 * o.noise_rms_kw * o.noise_rms_kw * o.dt_s / (r_y * r_y);
+  if (o.max_integrate_s > 0.0) t_s = std::min(t_s, o.max_integrate_s);
+  return std::max(o.min_integrate_s, t_s);
 }
 
 // Largest prior gain within f (1 +- spread), sampled on a log grid.
@@ -80,8 +95,9 @@ SweepPlan make_sweep_plan(const SweepPlanOptions& o, const ResponseFn& prior) {
     p.predicted_peak_kw = p.amplitude_pct * std::abs(prior(f)) + o.amplitude.noise_peak_kw;
     const double settle_cycles = o.settle_time_constants * o.slowest_time_constant_s * f;
     p.settle_cycles = std::max(o.min_settle_cycles, static_cast<int>(std::ceil(settle_cycles)));
+    const double integrate_s = integrate_time_s(o, p.amplitude_pct * std::abs(prior(f)));
     p.integrate_cycles =
-        std::max(o.min_integrate_cycles, static_cast<int>(std::ceil(o.min_integrate_s * f)));
+        std::max(o.min_integrate_cycles, static_cast<int>(std::ceil(integrate_s * f)));
     const double samples_per_cycle = 1.0 / (f * o.dt_s);
     p.settle_samples = std::llround(p.settle_cycles * samples_per_cycle);
     p.integrate_samples = std::llround(p.integrate_cycles * samples_per_cycle);

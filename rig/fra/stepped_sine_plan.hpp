@@ -10,6 +10,12 @@
 //   integrate = max(min_integrate_cycles, min_integrate_s * f) cycles: whole cycles so the
 //               lock-in projection is unbiased; at least min_integrate_s of data so that the
 //               noise in the lock-in's bandwidth 1/T stays small at high frequencies.
+//               Noise rule (when noise_rms_kw and target_rel_std are > 0): white noise of rms
+//               sigma on N samples gives the response phasor Y a relative standard error
+//               r = sqrt(2 sigma^2 / N) / |Y| (in magnitude, and in phase in radians), so with
+//               the predicted |Y| = A |G(f)| the integration lasts at least
+//                 N dt = 2 sigma^2 dt / (target_rel_std^2 (A |G(f)|)^2)   (<= max_integrate_s).
+//               It lengthens the points whose amplitude is capped below the band (high f).
 //   A raised-cosine fade-in over the first ramp_cycles (inside the settle time) avoids a step
 //   in the excitation's slope and the large start-up transient a resonance would give.
 //
@@ -50,6 +56,9 @@ struct SweepPlanOptions {
   int min_integrate_cycles = 8;
   double min_integrate_s = 4.0;
   double ramp_cycles = 1.0;  // fade-in, must not exceed the settle cycles
+  double noise_rms_kw = 0.0;     // white noise on the response; 0 disables the noise rule
+  double target_rel_std = 0.0;   // lock-in relative standard error aimed at; 0 disables it
+  double max_integrate_s = 0.0;  // cap of the noise rule; 0: no cap
   AmplitudeLimits amplitude;
 };
 

@@ -54,6 +54,10 @@ constexpr double kFadeOutS = 2.0;
 // sweep's amplitudes are planned per frequency from the model instead (0 disables the cap;
 // the envelope back-off and the trip stay in force).
 constexpr double kSinePeakToRms = 0.0;
+// Relative standard error aimed at per sweep point: 1 degree (0.0175 rad, 0.15 dB), so that
+// three standard errors stay inside a +-3 deg / +-0.5 dB comparison.
+constexpr double kSweepTargetRelStd = 0.0175;
+constexpr double kSweepMaxIntegrateFactor = 4.0;
 
 long soft_start_samples(const SupervisorConfig& s) {
   return static_cast<long>(std::ceil(1.0 / (s.backoff.recover_rate_per_s * s.dt_s))) + 1;
@@ -260,6 +264,12 @@ bool Sequencer::sweep() {
   p.min_settle_cycles = static_cast<int>(std::ceil(c.sweep.settle_cycles));
   p.min_integrate_cycles = static_cast<int>(std::ceil(c.sweep.integrate_cycles));
   p.min_integrate_s = c.sweep.min_integrate_s;
+  // Points whose amplitude is capped far below the band (above the resonance) integrate
+  // until the lock-in's relative standard error is kSweepTargetRelStd, at most
+  // kSweepMaxIntegrateFactor times the minimum (stepped_sine_plan.hpp, noise rule).
+  p.noise_rms_kw = data_.steady->noise_pct / 100.0 * p0_kw_;
+  p.target_rel_std = kSweepTargetRelStd;
+  p.max_integrate_s = kSweepMaxIntegrateFactor * c.sweep.min_integrate_s;
   p.amplitude.band_kw = c.safety.band_pct / 100.0 * p0_kw_;
   // Below the supervisor's back-off threshold (start_fraction of the band): a back-off inside
   // a point changes the amplitude mid-integration and biases that point.

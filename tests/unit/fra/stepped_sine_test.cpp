@@ -44,6 +44,27 @@ TEST(SweepPlan, LogGridTimingAndAmplitudeRules) {
   EXPECT_DOUBLE_EQ(make_sweep_plan(o, flat).points[0].amplitude_pct, 1.0);
 }
 
+TEST(SweepPlan, NoiseRuleLengthensLowResponsePoints) {
+  SweepPlanOptions o;
+  o.f_start_hz = 2.0;
+  o.f_stop_hz = 2.0;
+  o.points = 1;
+  o.amplitude.band_kw = 100.0;
+  o.amplitude.max_amplitude_pct = 0.5;
+  const ResponseFn flat = [](double) { return std::complex<double>(20.0, 0.0); };
+  EXPECT_EQ(make_sweep_plan(o, flat).points[0].integrate_cycles, 8);  // rule off by default
+  // |Y| = 0.5 % * 20 kW/% = 10 kW; 2 * 5^2 * 0.01 / (0.02 * 10)^2 = 12.5 s -> 25 cycles.
+  o.noise_rms_kw = 5.0;
+  o.target_rel_std = 0.02;
+  EXPECT_EQ(make_sweep_plan(o, flat).points[0].integrate_cycles, 25);
+  o.max_integrate_s = 6.0;  // the cap wins
+  EXPECT_EQ(make_sweep_plan(o, flat).points[0].integrate_cycles, 12);
+  o.noise_rms_kw = 0.5;  // 0.125 s: the minimum of 4 s wins
+  EXPECT_EQ(make_sweep_plan(o, flat).points[0].integrate_cycles, 8);
+  o.target_rel_std = -1.0;
+  EXPECT_THROW(make_sweep_plan(o, flat), std::invalid_argument);
+}
+
 TEST(SweepPlan, AmplitudeUsesLargestPriorGainNearby) {
   AmplitudeLimits l;
   l.band_kw = 100.0;
