@@ -105,7 +105,7 @@ namespace plantsim {
                                                                         "coupled)")                \
                                                                           X(kSolverRtol,           \
                                                                             "solver.rtol", "1",    \
-                                                                            1e-5, 1e-12, 1e-2,     \
+                                                                            1e-8, 1e-12, 1e-2,     \
                                                                             "CVODE relative "      \
                                                                             "tolerance")           \
                                                                               X(kSolverAtol,       \
