@@ -15,105 +15,84 @@ namespace plantsim {
 // X(id, "block.name", "unit", default, min, max, "meaning")
 #define PLANTSIM_INJECTOR(n) \
   X(kInjector##n, "engine.injector_" #n, "1", 1.0, 0.0, 1.0, "cylinder " #n " injector health")
-#define PLANTSIM_PARAMETERS                                                                        \
-  X(kRatedKw, "op.rated_kw", "kW", 4600.0, 10.0, 1e6, "rated electrical power (per-unit base)")    \
+// clang-format off
+#define PLANTSIM_PARAMETERS \
+  X(kRatedKw, "op.rated_kw", "kW", 4600.0, 10.0, 1e6, "rated electrical power (per-unit base)") \
   X(kPowerKw, "op.power_kw", "kW", 3500.0, 0.0, 1e6, "initial electrical power (operating point)") \
-  X(kFreqHz, "op.freq_hz", "Hz", 50.0, 40.0, 70.0, "nominal bus frequency")                        \
-  X(kRatedVoltageV, "op.rated_voltage_v", "V", 11000.0, 100.0, 1e6, "rated terminal voltage")      \
-  X(kGridConnected, "op.grid_connected", "bool", 1.0, 0.0, 1.0, "1 grid, 0 islanded load")         \
-  X(kGovR, "gov.r_pu", "pu", 0.05, 0.001, 1.0, "power-feedback droop R")                           \
-  X(kGovTe, "gov.te_s", "s", 5.0, 0.001, 100.0, "power feedback filter TE")                        \
-  X(kGovSpeedGain, "gov.speed_gain", "1", 1.0, 0.0, 10.0, "weight of dw in e (1 = DEGOV1)")        \
-  X(kGovT1, "gov.t1_s", "s", 0.2, 0.001, 10.0, "control box T1")                                   \
-  X(kGovT2, "gov.t2_s", "s", 0.003, 0.0001, 10.0, "control box T2")                                \
-  X(kGovT3, "gov.t3_s", "s", 0.2, 0.0, 10.0, "control box lead T3")                                \
-  X(kGovK, "gov.k", "1/s", 4.0, 0.001, 1000.0, "actuator gain K")                                  \
-  X(kGovT4, "gov.t4_s", "s", 5.0, 0.0, 100.0, "actuator lead T4")                                  \
-  X(kGovT5, "gov.t5_s", "s", 0.004, 0.0001, 10.0, "actuator lag T5")                               \
-  X(kGovT6, "gov.t6_s", "s", 0.002, 0.0001, 10.0, "actuator lag T6")                               \
-  X(kGovTmin, "gov.tmin_pu", "pu", 0.0, -1.0, 1.0, "actuator lower limit TMIN")                    \
-  X(kGovTmax, "gov.tmax_pu", "pu", 1.1, 0.1, 2.0, "actuator upper limit TMAX")                     \
-  X(kGovRate, "gov.rate_limit_pu_s", "pu/s", 0.0, 0.0, 100.0, "actuator rate limit (0 off)")       \
-  X(kGovDeadband, "gov.deadband_pu", "pu", 0.0, 0.0, 0.5, "deadband on e (0 off)")                 \
-  X(kGovBacklash, "gov.backlash_pu", "pu", 0.0, 0.0, 0.5, "rack backlash width (0 off)")           \
-  X(kEngRpm, "engine.rpm", "rpm", 600.0, 60.0, 3000.0, "rated speed N")                            \
-  X(kEngCylinders, "engine.cylinders", "1", 12.0, 1.0, 20.0, "cylinders (four-stroke)")            \
-  X(kEngDeadTime, "engine.dead_time_s", "s", 0.0, 0.0, 1.0,                                        \
-    "fuel dead time; 0 = 30/N + 60/(n_cyl N)")                                                     \
-  X(kEngCombustionLag, "engine.combustion_lag_s", "s", 0.008, 0.0001, 1.0, "combustion lag")       \
-  X(kEngBoostLag, "engine.boost_lag_s", "s", 2.0, 0.05, 60.0, "turbocharger boost lag")            \
-  X(kEngMapMin, "engine.map_fuel_min_pu", "pu", 0.4, 0.0, 2.0, "fuel limit at zero boost")         \
-  X(kEngMapGain, "engine.map_fuel_gain", "pu/pu", 0.9, 0.0, 10.0, "fuel limit per pu of boost")    \
-  X(kEngInjectorsOut, "engine.injectors_out", "1", 0.0, 0.0, 20.0, "cylinders 1..n without fuel")  \
-  X(kEngPulseWidth, "engine.pulse_width_deg", "deg", 30.0, 1.0, 720.0,                             \
-    "torque pulse width (crank)")                                                                  \
-  X(kEngRipple, "engine.ripple", "bool", 1.0, 0.0, 1.0, "firing ripple in the output")             \
-  PLANTSIM_INJECTOR(1)                                                                             \
-  PLANTSIM_INJECTOR(2)                                                                             \
-  PLANTSIM_INJECTOR(3) PLANTSIM_INJECTOR(4) PLANTSIM_INJECTOR(5) PLANTSIM_INJECTOR(                \
-      6) PLANTSIM_INJECTOR(7) PLANTSIM_INJECTOR(8) PLANTSIM_INJECTOR(9) PLANTSIM_INJECTOR(10)      \
-      PLANTSIM_INJECTOR(11) PLANTSIM_INJECTOR(12) PLANTSIM_INJECTOR(13) PLANTSIM_INJECTOR(14)      \
-          PLANTSIM_INJECTOR(15) PLANTSIM_INJECTOR(16) PLANTSIM_INJECTOR(17) PLANTSIM_INJECTOR(18)  \
-              PLANTSIM_INJECTOR(19) PLANTSIM_INJECTOR(20) X(                                       \
-                  kAltH, "alt.h_s", "s", 2.0, 0.05, 30.0,                                          \
-                  "inertia constant H") X(kAltD, "alt.d_pu", "pu", 11.0, 0.0, 200.0, "damping D")  \
-                  X(kAltE, "alt.e_pu", "pu", 1.1, 0.3, 3.0, "initial internal voltage E'") X(      \
-                      kAltXdp, "alt.xdp_pu", "pu", 0.25, 0.01, 3.0, "transient reactance xd'")     \
-                      X(kAltXd, "alt.xd_pu", "pu", 1.8, 0.05, 5.0, "synchronous reactance xd") X(  \
-                          kAltTdo, "alt.tdo_s", "s", 5.0, 0.1, 30.0,                               \
-                          "open-circuit time constant Td0'") X(kAltFluxDecay, "alt.flux_decay",    \
-                                                               "bool", 0.0, 0.0,                   \
-                                                               1.0, "1 = E' follows flux decay")   \
-                          X(kAltAvr, "alt.avr", "bool", 0.0, 0.0, 1.0,                             \
-                            "1 = simple AVR on Efd (needs flux_decay)")                            \
-                              X(kAltAvrKa, "alt.avr_ka", "pu/pu", 50.0, 0.1, 1000.0,               \
-                                "AVR gain Ka") X(kAltAvrTa, "alt.avr_ta_s", "s", 0.05, 0.001,      \
-                                                 10.0, "AVR time constant Ta")                     \
-                                  X(kGridV, "grid.v_pu", "pu", 1.0, 0.5, 1.5, "grid voltage V") X( \
-                                      kGridXe, "grid.xe_pu", "pu", 0.25, 0.0, 3.0,                 \
-                                      "transformer + line reactance")                              \
-                                      X(kLoadD, "load.d_pu", "pu/pu", 1.0, 0.0, 20.0,              \
-                                        "island load frequency dependence D_L")                    \
-                                          X(kLoadPu, "load.step_pu", "pu", 0.0, -1.0, 1.0,         \
-                                            "island load change from the operating point")         \
-                                              X(kMeasLag, "meas.transducer_lag_s", "s", 0.003,     \
-                                                0.0001, 10.0, "power transducer lag")              \
-                                                  X(kMeasGain, "meas.gain", "1", 1.0, 0.0, 10.0,   \
-                                                    "transducer gain (1 = "                        \
-                                                    "no error)") X(kMeasNoise, "meas.noise_kw",    \
-                                                                   "kW", 0.0, 0.0, 1e5,            \
-                                                                   "white noise rms")              \
-                                                      X(kMeasPickup, "meas.pickup_kw", "kW", 0.0,  \
-                                                        0.0, 1e5,                                  \
-                                                        "mains pick-up "                           \
-                                                        "amplitude") X(kMeasPickupHz,              \
-                                                                       "meas.pickup_hz", "Hz",     \
-                                                                       50.0, 1.0, 1000.0,          \
-                                                                       "mains pick-up frequency")  \
-                                                          X(kMeasDrift, "meas.drift_kw", "kW",     \
-                                                            0.0, 0.0, 1e5,                         \
-                                                            "slow drift rms (Ornstein-Uhlenbeck)") \
-                                                              X(kMeasDriftTau, "meas.drift_tau_s", \
-                                                                "s", 60.0, 0.1, 1e5,               \
-                                                                "drift correlation time")          \
-                                                                  X(kMeasQuant, "meas.quant_kw",   \
-                                                                    "kW", 0.0, 0.0, 1e4,           \
-                                                                    "quantisation step (0 off)")   \
-                                                                      X(kMeasAcRc, "meas.ac_rc_s", \
-                                                                        "s", 0.0, 0.0, 1e4,        \
-                                                                        "AC-coupling RC (0 = DC "  \
-                                                                        "coupled)")                \
-                                                                          X(kSolverRtol,           \
-                                                                            "solver.rtol", "1",    \
-                                                                            1e-8, 1e-12, 1e-2,     \
-                                                                            "CVODE relative "      \
-                                                                            "tolerance")           \
-                                                                              X(kSolverAtol,       \
-                                                                                "solver.atol",     \
-                                                                                "pu", 1e-7, 1e-14, \
-                                                                                1e-2,              \
-                                                                                "CVODE absolute "  \
-                                                                                "tolerance")
+  X(kFreqHz, "op.freq_hz", "Hz", 50.0, 40.0, 70.0, "nominal bus frequency") \
+  X(kRatedVoltageV, "op.rated_voltage_v", "V", 11000.0, 100.0, 1e6, "rated terminal voltage") \
+  X(kGridConnected, "op.grid_connected", "bool", 1.0, 0.0, 1.0, "1 grid, 0 islanded load") \
+  X(kGovR, "gov.r_pu", "pu", 0.05, 0.001, 1.0, "power-feedback droop R") \
+  X(kGovTe, "gov.te_s", "s", 5.0, 0.001, 100.0, "power feedback filter TE") \
+  X(kGovSpeedGain, "gov.speed_gain", "1", 1.0, 0.0, 10.0, "weight of dw in e (1 = DEGOV1)") \
+  X(kGovT1, "gov.t1_s", "s", 0.2, 0.001, 10.0, "control box T1") \
+  X(kGovT2, "gov.t2_s", "s", 0.003, 0.0001, 10.0, "control box T2") \
+  X(kGovT3, "gov.t3_s", "s", 0.2, 0.0, 10.0, "control box lead T3") \
+  X(kGovK, "gov.k", "1/s", 4.0, 0.001, 1000.0, "actuator gain K") \
+  X(kGovT4, "gov.t4_s", "s", 5.0, 0.0, 100.0, "actuator lead T4") \
+  X(kGovT5, "gov.t5_s", "s", 0.004, 0.0001, 10.0, "actuator lag T5") \
+  X(kGovT6, "gov.t6_s", "s", 0.002, 0.0001, 10.0, "actuator lag T6") \
+  X(kGovTmin, "gov.tmin_pu", "pu", 0.0, -1.0, 1.0, "actuator lower limit TMIN") \
+  X(kGovTmax, "gov.tmax_pu", "pu", 1.1, 0.1, 2.0, "actuator upper limit TMAX") \
+  X(kGovRate, "gov.rate_limit_pu_s", "pu/s", 0.0, 0.0, 100.0, "actuator rate limit (0 off)") \
+  X(kGovDeadband, "gov.deadband_pu", "pu", 0.0, 0.0, 0.5, "deadband on e (0 off)") \
+  X(kGovBacklash, "gov.backlash_pu", "pu", 0.0, 0.0, 0.5, "rack backlash width (0 off)") \
+  X(kEngRpm, "engine.rpm", "rpm", 600.0, 60.0, 3000.0, "rated speed N") \
+  X(kEngCylinders, "engine.cylinders", "1", 12.0, 1.0, 20.0, "cylinders (four-stroke)") \
+  X(kEngDeadTime, "engine.dead_time_s", "s", 0.0, 0.0, 1.0, "fuel dead time; 0 = 30/N + 60/(n_cyl N)") \
+  X(kEngCombustionLag, "engine.combustion_lag_s", "s", 0.008, 0.0001, 1.0, "combustion lag") \
+  X(kEngBoostLag, "engine.boost_lag_s", "s", 2.0, 0.05, 60.0, "turbocharger boost lag") \
+  X(kEngMapMin, "engine.map_fuel_min_pu", "pu", 0.4, 0.0, 2.0, "fuel limit at zero boost") \
+  X(kEngMapGain, "engine.map_fuel_gain", "pu/pu", 0.9, 0.0, 10.0, "fuel limit per pu of boost") \
+  X(kEngInjectorsOut, "engine.injectors_out", "1", 0.0, 0.0, 20.0, "cylinders 1..n without fuel") \
+  X(kEngPulseWidth, "engine.pulse_width_deg", "deg", 30.0, 1.0, 720.0, "torque pulse width (crank)") \
+  X(kEngRipple, "engine.ripple", "bool", 1.0, 0.0, 1.0, "firing ripple in the output") \
+  PLANTSIM_INJECTOR(1) \
+  PLANTSIM_INJECTOR(2) \
+  PLANTSIM_INJECTOR(3) \
+  PLANTSIM_INJECTOR(4) \
+  PLANTSIM_INJECTOR(5) \
+  PLANTSIM_INJECTOR(6) \
+  PLANTSIM_INJECTOR(7) \
+  PLANTSIM_INJECTOR(8) \
+  PLANTSIM_INJECTOR(9) \
+  PLANTSIM_INJECTOR(10) \
+  PLANTSIM_INJECTOR(11) \
+  PLANTSIM_INJECTOR(12) \
+  PLANTSIM_INJECTOR(13) \
+  PLANTSIM_INJECTOR(14) \
+  PLANTSIM_INJECTOR(15) \
+  PLANTSIM_INJECTOR(16) \
+  PLANTSIM_INJECTOR(17) \
+  PLANTSIM_INJECTOR(18) \
+  PLANTSIM_INJECTOR(19) \
+  PLANTSIM_INJECTOR(20) \
+  X( kAltH, "alt.h_s", "s", 2.0, 0.05, 30.0, "inertia constant H") \
+  X(kAltD, "alt.d_pu", "pu", 11.0, 0.0, 200.0, "damping D") \
+  X(kAltE, "alt.e_pu", "pu", 1.1, 0.3, 3.0, "initial internal voltage E'") \
+  X( kAltXdp, "alt.xdp_pu", "pu", 0.25, 0.01, 3.0, "transient reactance xd'") \
+  X(kAltXd, "alt.xd_pu", "pu", 1.8, 0.05, 5.0, "synchronous reactance xd") \
+  X( kAltTdo, "alt.tdo_s", "s", 5.0, 0.1, 30.0, "open-circuit time constant Td0'") \
+  X(kAltFluxDecay, "alt.flux_decay", "bool", 0.0, 0.0, 1.0, "1 = E' follows flux decay") \
+  X(kAltAvr, "alt.avr", "bool", 0.0, 0.0, 1.0, "1 = simple AVR on Efd (needs flux_decay)") \
+  X(kAltAvrKa, "alt.avr_ka", "pu/pu", 50.0, 0.1, 1000.0, "AVR gain Ka") \
+  X(kAltAvrTa, "alt.avr_ta_s", "s", 0.05, 0.001, 10.0, "AVR time constant Ta") \
+  X(kGridV, "grid.v_pu", "pu", 1.0, 0.5, 1.5, "grid voltage V") \
+  X( kGridXe, "grid.xe_pu", "pu", 0.25, 0.0, 3.0, "transformer + line reactance") \
+  X(kLoadD, "load.d_pu", "pu/pu", 1.0, 0.0, 20.0, "island load frequency dependence D_L") \
+  X(kLoadPu, "load.step_pu", "pu", 0.0, -1.0, 1.0, "island load change from the operating point") \
+  X(kMeasLag, "meas.transducer_lag_s", "s", 0.003, 0.0001, 10.0, "power transducer lag") \
+  X(kMeasGain, "meas.gain", "1", 1.0, 0.0, 10.0, "transducer gain (1 = no error)") \
+  X(kMeasNoise, "meas.noise_kw", "kW", 0.0, 0.0, 1e5, "white noise rms") \
+  X(kMeasPickup, "meas.pickup_kw", "kW", 0.0, 0.0, 1e5, "mains pick-up amplitude") \
+  X(kMeasPickupHz, "meas.pickup_hz", "Hz", 50.0, 1.0, 1000.0, "mains pick-up frequency") \
+  X(kMeasDrift, "meas.drift_kw", "kW", 0.0, 0.0, 1e5, "slow drift rms (Ornstein-Uhlenbeck)") \
+  X(kMeasDriftTau, "meas.drift_tau_s", "s", 60.0, 0.1, 1e5, "drift correlation time") \
+  X(kMeasQuant, "meas.quant_kw", "kW", 0.0, 0.0, 1e4, "quantisation step (0 off)") \
+  X(kMeasAcRc, "meas.ac_rc_s", "s", 0.0, 0.0, 1e4, "AC-coupling RC (0 = DC coupled)") \
+  X(kSolverRtol, "solver.rtol", "1", 1e-8, 1e-12, 1e-2, "CVODE relative tolerance") \
+  X(kSolverAtol, "solver.atol", "pu", 1e-7, 1e-14, 1e-2, "CVODE absolute tolerance")
+// clang-format on
 
 enum class P : int {
 #define X(id, name, unit, def, lo, hi, doc) id,
