@@ -31,11 +31,10 @@ void report(benchmark::State& state, const IdentifyResult* res) {
   }
 }
 
-// Defaults of `rig identify`: order chosen from the nine candidates, delay estimated,
-// block-spread standard errors over 8 blocks.
-void BM_IdentifyHourAutoOrder(benchmark::State& state) {
-  const IdentifyOptions io;
-  const experiments::Record& rec = hour();  // generated outside the timed loop
+// Times identify() on the hour-long record (generated outside the timed loop) and reports
+// the estimate and the real-time factor.
+void time_identify(benchmark::State& state, const IdentifyOptions& io) {
+  const experiments::Record& rec = hour();
   IdentifyResult res;
   for (auto _ : state) {
     res = identify(rec.u, rec.y, rec.dt_s, io);
@@ -43,19 +42,17 @@ void BM_IdentifyHourAutoOrder(benchmark::State& state) {
   }
   report(state, &res);
 }
+
+// Defaults of `rig identify`: order chosen from the nine candidates, delay estimated,
+// block-spread standard errors over 8 blocks.
+void BM_IdentifyHourAutoOrder(benchmark::State& state) { time_identify(state, IdentifyOptions{}); }
 BENCHMARK(BM_IdentifyHourAutoOrder)->Unit(benchmark::kSecond)->UseRealTime()->Iterations(2);
 
 // Order given (n = 2, m = 0): correlation, delay search, MMFM and block standard errors only.
 void BM_IdentifyHourOrder2(benchmark::State& state) {
   IdentifyOptions io;
   io.order = ModelOrder{2, 0};
-  const experiments::Record& rec = hour();  // generated outside the timed loop
-  IdentifyResult res;
-  for (auto _ : state) {
-    res = identify(rec.u, rec.y, rec.dt_s, io);
-    benchmark::DoNotOptimize(res);
-  }
-  report(state, &res);
+  time_identify(state, io);
 }
 BENCHMARK(BM_IdentifyHourOrder2)->Unit(benchmark::kSecond)->UseRealTime()->Iterations(2);
 

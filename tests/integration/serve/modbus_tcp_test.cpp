@@ -208,16 +208,9 @@ TEST(ModbusTcp, GarbageAndStalledClientsDoNotStopTheServer) {
 }
 
 TEST(ModbusTcp, LockstepIsDeterministicForASeed) {
-  auto run = [](const std::string& seed) {
-    auto s = start_served(linear_program(),
-                          {"--modbus", "tcp://127.0.0.1:0", "--clock", "lockstep", "--seed", seed});
-    auto ctx = connect_tcp(s.modbus_port);
-    EXPECT_TRUE(ctx);
-    return ctx ? scripted_exchange(ctx.get(), 300) : std::vector<std::uint16_t>{};
-  };
-  const auto a = run("7");
-  const auto b = run("7");
-  const auto c = run("8");
+  const auto a = lockstep_recording(linear_program(), "7");
+  const auto b = lockstep_recording(linear_program(), "7");
+  const auto c = lockstep_recording(linear_program(), "8");
   ASSERT_EQ(a.size(), 3000u);
   EXPECT_EQ(a, b) << "seed 7 twice";
   EXPECT_NE(a, c) << "seeds 7 and 8 should differ (the plant has measurement noise)";

@@ -63,16 +63,9 @@ TEST(RealPlant, BiasStepOverModbusLockstepMatchesModelDcGain) {
 
 TEST(RealPlant, LockstepIsDeterministicForASeed) {
   REQUIRE_REAL_PLANTSIM();
-  auto run = [](const std::string& seed) {
-    auto s = start_served(real_program(),
-                          {"--modbus", "tcp://127.0.0.1:0", "--clock", "lockstep", "--seed", seed});
-    auto ctx = connect_tcp(s.modbus_port);
-    EXPECT_TRUE(ctx);
-    return ctx ? scripted_exchange(ctx.get(), 300) : std::vector<std::uint16_t>{};
-  };
-  const auto a = run("3");
-  const auto b = run("3");
-  const auto c = run("4");
+  const auto a = lockstep_recording(real_program(), "3");
+  const auto b = lockstep_recording(real_program(), "3");
+  const auto c = lockstep_recording(real_program(), "4");
   ASSERT_EQ(a.size(), 3000u);
   EXPECT_EQ(a, b) << "seed 3 twice";
   EXPECT_NE(a, c) << "seeds 3 and 4 gave identical bytes: is the plant's noise seeded?";

@@ -110,6 +110,18 @@ inline std::vector<std::uint16_t> scripted_exchange(modbus_t* ctx, int exchanges
   return out;
 }
 
+// Starts `program` in lockstep over Modbus TCP with `seed`, runs the scripted exchange (300
+// exchanges) against it and returns the recorded input registers; empty when the connection
+// failed (already reported as a test failure).
+inline std::vector<std::uint16_t> lockstep_recording(const std::string& program,
+                                                     const std::string& seed) {
+  auto s = start_served(program,
+                        {"--modbus", "tcp://127.0.0.1:0", "--clock", "lockstep", "--seed", seed});
+  auto ctx = connect_tcp(s.modbus_port);
+  EXPECT_TRUE(ctx);
+  return ctx ? scripted_exchange(ctx.get(), 300) : std::vector<std::uint16_t>{};
+}
+
 // Runs a program to its exit (10 s at most) and collects its output.
 struct Outcome {
   int exit_code = -1;
