@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <iostream>
 
+#include "plantsim/plant/replay.hpp"
 #include "plantsim/serve/can_node.hpp"
 #include "plantsim/serve/realtime_clock.hpp"
 
@@ -138,6 +139,20 @@ int serve(const ServeOptions& o, const PlantHooks& hooks) {
         return 2;
       }
       hooks.linearise(o.plant, *o.linearise_to);
+      return 0;
+    }
+    if (o.replay_in) {
+      const ReplayInput input = read_replay_csv(*o.replay_in, o.replay_column);
+      std::vector<double> power_kw;
+      try {
+        power_kw = replay(input, o.plant, hooks.make_plant);
+      } catch (const ConfigError&) {
+        throw;
+      } catch (const std::runtime_error& e) {  // the solver failed: a plant fault
+        std::cerr << "plantsim: " << e.what() << "\n";
+        return 3;
+      }
+      write_replay_csv(*o.replay_out, input, power_kw);
       return 0;
     }
     r.governor = std::make_unique<Governor>(hooks.make_plant(o.plant));

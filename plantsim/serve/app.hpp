@@ -39,6 +39,9 @@ struct ServeOptions {
   bool readout = false;
   std::optional<std::filesystem::path> linearise_to;
   bool list_params = false;
+  // --replay IN.csv --replay-out OUT.csv [--replay-column NAME] (plantsim/plant/replay.hpp)
+  std::optional<std::filesystem::path> replay_in, replay_out;
+  std::string replay_column = "u";
 };
 
 // Returns the exit code.

@@ -32,6 +32,13 @@ void add_options(CLI::App& app, ServeOptions& o, std::string& clock, std::string
   app.add_option("--duration", o.duration_s, "Stop after this much plant time (seconds)");
   app.add_option("--linearise", o.linearise_to,
                  "Write the linearised bias-to-power transfer function JSON and exit");
+  app.add_option("--replay", o.replay_in,
+                 "Replay a recorded bias (CSV with header, time column t, bias in %) through "
+                 "the plant without noise, drift, pick-up, ripple or quantisation, tick = the "
+                 "recording's period; needs --replay-out; exits when done");
+  app.add_option("--replay-out", o.replay_out, "Replay output CSV: t,u,power_kw");
+  app.add_option("--replay-column", o.replay_column, "Bias column of the replay input")
+      ->default_str("u");
   app.add_flag("--readout", o.readout, "Print power, speed and bias once a second");
   app.add_flag("--list-params", o.list_params,
                "Print every plant parameter (of --preset/--config) as TOML with units and "
@@ -51,6 +58,9 @@ void validate(ServeOptions& o, const std::string& clock, const std::string& tick
   o.serve_faults = split_serve_faults(o.plant.faults);
   if (o.duration_s && !(*o.duration_s > 0.0 && *o.duration_s < 1e7)) {
     throw ConfigError(fmt::format("--duration {}: expected seconds > 0", *o.duration_s));
+  }
+  if (o.replay_in.has_value() != o.replay_out.has_value()) {
+    throw ConfigError("--replay and --replay-out: expected both or neither");
   }
   if (o.modbus) parse_modbus_endpoint(*o.modbus);
   if (o.can) parse_can_endpoint(*o.can);

@@ -3,7 +3,10 @@
 // Why a model and a recording disagree (DESIGN.md sections 4 and 9). Writes report.json,
 // report.html and augmented_model.json. Exit 0 when the diagnosis ran (whatever the
 // verdict), 2 for bad input (one line naming the file/field and what was expected).
-// The model is a transfer-function JSON; a plantsim TOML plant is not accepted yet.
+// The model is a transfer-function JSON or a plantsim TOML plant: the plant is linearised by
+// the plantsim executable beside the rig, the diagnosis runs against that transfer function,
+// and the effects found are written back as plant parameters (augmented_plant.toml) and
+// checked by replaying the recorded bias through both plants (diagnose_plant.hpp).
 #include "rig/cli/diagnose.hpp"
 
 #include <fmt/format.h>
@@ -18,12 +21,15 @@
 #include <string>
 
 #include "rig/cli/commands.hpp"
+#include "rig/cli/diagnose_plant.hpp"
 #include "rig/diagnose/diagnose.hpp"
 #include "rig/diagnose/report_out.hpp"
 #include "rig/io/input_error.hpp"
 #include "rig/io/model_file.hpp"
 #include "rig/io/recording.hpp"
 #include "rig/report/json_out.hpp"
+#include "rig/session/emulator.hpp"
+#include "rig/signal/ac_coupling.hpp"
 
 namespace rig::cli {
 namespace {
@@ -32,7 +38,7 @@ struct DiagnoseArgs {
   std::filesystem::path recording, model, out;
   std::string input, output, columns;
   std::optional<double> dt_s;
-  bool no_pairs = false, json = false;
+  bool no_pairs = false, json = false, no_plant_check = false;
 };
 
 [[noreturn]] void bad(const std::string& file, const std::string& field, const std::string& what) {
@@ -103,21 +109,35 @@ std::optional<double> output_coupling(const io::Recording& rec, const std::strin
   return has(out) && !has(in) ? sc.coupling_rc_s : std::nullopt;
 }
 
+// A plant TOML: plantsim's linearisation, with half a sample of dead time for the bias the
+// recording holds over each sample (zero-order hold; the linearisation is continuous).
+io::ModelFile plant_baseline(const PlantModel& plant, double dt_s) {
+  io::ModelFile m = plant.linear;
+  m.tf.delay_s += 0.5 * dt_s;
+  return m;
+}
+
 int run_diagnose(const DiagnoseArgs& a) {
-  const std::string ext = a.model.extension().string();
-  if (ext == ".toml")
-    bad(a.model.string(), "",
-        "plantsim TOML plants are not supported by diagnose yet; give a "
-        "transfer-function model JSON (e.g. plantsim's linearised *.tf.json)");
+  const bool plant_toml = a.model.extension().string() == ".toml";
   std::string in, out;
   const io::Recording rec = load(a, in, out);
-  const io::ModelFile model = io::read_model(a.model);
+  std::optional<TempDir> tmp;
+  std::optional<PlantModel> plant;
+  if (plant_toml) {
+    tmp.emplace();
+    plant = load_plant_model(a.model, session::default_plantsim_path(), *tmp);
+  }
+  const io::ModelFile model = plant ? plant_baseline(*plant, rec.dt_s) : io::read_model(a.model);
   check_units(rec, model, a.model.string(), in, out);
   if (!model.tf.is_stable())
     bad(a.model.string(), "den",
         "expected a stable model (every pole in the open left half plane)");
+  // The recording chain's coupling; a plant's own AC coupling (meas.ac_rc_s) is not in its
+  // linearisation, so it is applied here instead.
+  const std::optional<double> chain_rc = output_coupling(rec, in, out);
+  const double plant_rc = plant ? plant->param("meas.ac_rc_s") : 0.0;
   diagnose::DiagnoseInput di{model.tf, rec.column(in), rec.column(out), rec.dt_s,
-                             output_coupling(rec, in, out)};
+                             plant_rc > 0.0 ? std::optional(plant_rc) : chain_rc};
   diagnose::DiagnoseOptions opt;
   opt.try_pairs = !a.no_pairs;
   diagnose::DiagnoseResult r;
@@ -128,15 +148,23 @@ int run_diagnose(const DiagnoseArgs& a) {
   }
   std::filesystem::create_directories(a.out);
   const diagnose::ReportContext ctx{a.recording.string(), a.model.string(), in, out};
-  const nlohmann::json doc = diagnose::report_json(r, ctx);
+  nlohmann::json doc = diagnose::report_json(r, ctx);
+  std::vector<std::string> plant_lines;
+  if (plant) {
+    const PlantOutputInput pi{*plant, *tmp, r, model.tf, di.u, di.y, rec.dt_s,
+                              plant_rc > 0.0 ? std::nullopt : chain_rc, a.out,
+                              a.recording.string(), !a.no_plant_check};
+    doc.update(write_plant_outputs(pi, &plant_lines));
+  }
   report::write_json_file(a.out / "report.json", doc);
   diagnose::write_report_html(r, ctx, a.out / "report.html");
   io::write_model(a.out / "augmented_model.json", diagnose::augmented_model(r, model));
   if (a.json) {
     fmt::print("{}\n", doc.dump(2));
   } else {
-    fmt::print("rig diagnose: verdict {}\n  {}\n  report: {}\n", r.verdict, r.explanation,
-               (a.out / "report.html").string());
+    fmt::print("rig diagnose: verdict {}\n  {}\n", r.verdict, r.explanation);
+    for (const auto& l : plant_lines) fmt::print("  {}\n", l);
+    fmt::print("  report: {}\n", (a.out / "report.html").string());
   }
   return kExitOk;
 }
@@ -151,7 +179,10 @@ void add_diagnose_command(CLI::App& app) {
       "effects of DESIGN.md 9, write report.json, report.html, augmented_model.json");
   cmd->add_option("--recording", a->recording, "Recording CSV (sidecar JSON beside it is read)")
       ->required();
-  cmd->add_option("--model", a->model, "Transfer-function model JSON")->required();
+  cmd->add_option("--model", a->model,
+                  "Transfer-function model JSON, or a plantsim plant TOML (linearised by the "
+                  "plantsim beside rig; also writes augmented_plant.toml)")
+      ->required();
   cmd->add_option("--input", a->input, "Input column (default u)");
   cmd->add_option("--output", a->output, "Output column (default y)");
   cmd->add_option("--columns", a->columns, "Input and output columns by 1-based index: I,J")
@@ -160,6 +191,8 @@ void add_diagnose_command(CLI::App& app) {
   cmd->add_option("--dt", a->dt_s, "Sample period in s (overrides the time column and sidecar)");
   cmd->add_option("--out", a->out, "Output folder")->required();
   cmd->add_flag("--no-pairs", a->no_pairs, "Do not try pairs of effects");
+  cmd->add_flag("--no-plant-check", a->no_plant_check,
+                "With a plant TOML: skip replaying the recording through the plants");
   cmd->add_flag("--json", a->json, "Print report.json on stdout instead of the summary");
   cmd->callback([a] {
     int code = kExitUsage;
@@ -170,6 +203,8 @@ void add_diagnose_command(CLI::App& app) {
     } catch (const std::invalid_argument& e) {
       fmt::print(stderr, "rig diagnose: {}\n", e.what());
     } catch (const std::filesystem::filesystem_error& e) {
+      fmt::print(stderr, "rig diagnose: {}\n", e.what());
+    } catch (const std::runtime_error& e) {  // plantsim could not be started
       fmt::print(stderr, "rig diagnose: {}\n", e.what());
     }
     if (code != kExitOk) throw CLI::RuntimeError(code);

@@ -1,0 +1,243 @@
+// From diagnosed effects to plantsim parameters. The baseline transfer function is plantsim's
+// linearisation: input u = setpoint bias in % of rated power P_r, output y = measured power
+// in kW. In the governor (DESIGN.md 7, plantsim/plant/governor.hpp) the bias b = u/100 pu
+// enters the error as e = Pref + R b - g dw - R Pe_f, and with R K T4 = 1 the actuator
+// follows the bias one to one between 1/T4 and 1/T1 (rack change 0.01 pu per % of bias, 1 %
+// of rated power once the engine delivers it). So on the rack and its rate, 1 % of bias is
+// 0.01 pu; on the error e it is R x 0.01 pu. The table (effect parameter -> plant key):
+//
+//   dead_time      extra_delay_s d      engine.dead_time_s = Td0 + d, Td0 the effective fuel
+//                                       dead time (dead_time_s if > 0, else 30/N + 60/(n N))
+//   extra_lag      time_constant_s T    engine.combustion_lag_s += T (time constants add: the
+//                                       sum keeps the lag's low-frequency phase, 1st order)
+//   sensor_lag     time_constant_s T    meas.transducer_lag_s += T (same approximation)
+//   ac_coupling    rc_s                 meas.ac_rc_s = rc_s
+//   gain_change    gain_ratio g         meas.gain *= g
+//   deadband       half_width h (%)     gov.deadband_pu += R h/100 (plantsim's deadband_pu is
+//                                       the half width on e: |e| <= db gives 0)
+//   backlash       half_width h (%)     gov.backlash_pu += 2 h/100 (plantsim's backlash_pu is
+//                                       the full play width on the rack: rack = xf -+ w/2)
+//   rate_limit     rate_limit_per_s r   gov.rate_limit_pu_s = r/100 (on the actuator rate)
+//   saturation     upper, lower (%)     gov.tmax_pu = rack0 + upper/100,
+//                                       gov.tmin_pu = rack0 - lower/100, rack0 = the steady
+//                                       rack (P0/P_r)/c, c = mean injector health
+//   load_damping   zeta z               alt.d_pu *= z / zeta0 (swing-mode damping ratio is
+//                                       about proportional to D; zeta0 of the baseline's least
+//                                       damped pole pair)
+//   periodic_      freq_hz, amplitude   meas.pickup_hz, meas.pickup_kw (the fitted peak
+//   disturbance                         amplitude; plantsim's pick-up is A sin(2 pi f t))
+//   drift          time_constant_s      meas.drift_tau_s, meas.drift_kw = the fitted drift rms
+//                                       (the smoother's time scale approximates the drift's)
+//   resonance, static_nonlinearity, nonlinear_stiffness, coulomb_friction: no plant
+//   parameter; the plant is left as it was (augmented_model.json carries them).
+// Every value is clamped to the range plantsim lists for the key (a note says so).
+#include "rig/cli/diagnose_plant.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <sstream>
+#include <toml++/toml.h>
+
+#include "rig/diagnose/augmented_model.hpp"
+#include "rig/io/input_error.hpp"
+
+namespace rig::cli {
+namespace {
+
+using diagnose::Effect;
+
+double round6(double v) { return std::stod(fmt::format("{:.6g}", v)); }
+
+double derived_value(const diagnose::HypothesisFit& h, const std::string& key, double fallback) {
+  for (const auto& [k, v] : h.derived)
+    if (k == key && std::isfinite(v)) return v;
+  return fallback;
+}
+
+class Mapper {
+ public:
+  Mapper(const PlantModel& plant, PlantMapping* out) : plant_(plant), out_(out) {}
+
+  // Sets key to value (clamped to plantsim's range); reason names the conversion.
+  void set(const std::string& key, double value, const std::string& effect,
+           const std::string& reason) {
+    const double old = current(key);
+    double v = value;
+    const auto r = plant_.ranges.find(key);
+    if (r != plant_.ranges.end() && (v < r->second.first || v > r->second.second)) {
+      v = std::clamp(v, r->second.first, r->second.second);
+      out_->notes.push_back(fmt::format("{}: {:.6g} clamped to plantsim's range {:.6g} .. {:.6g}",
+                                        key, value, r->second.first, r->second.second));
+    }
+    v = round6(v);
+    for (auto& c : out_->changes)
+      if (c.key == key) {
+        c.new_value = v, c.effect += "+" + effect, c.reason += "; " + reason;
+        return;
+      }
+    out_->changes.push_back({key, old, v, effect, reason});
+  }
+  // The value as changed so far, else the plant's.
+  double current(const std::string& key) const {
+    for (const auto& c : out_->changes)
+      if (c.key == key) return c.new_value;
+    return plant_.param(key);
+  }
+  void note(const std::string& text) { out_->notes.push_back(text); }
+
+ private:
+  const PlantModel& plant_;
+  PlantMapping* out_;
+};
+
+double effective_dead_time_s(const PlantModel& p) {
+  const double td = p.param("engine.dead_time_s");
+  if (td > 0.0) return td;
+  const double n = p.param("engine.rpm");
+  return 30.0 / n + 60.0 / (p.param("engine.cylinders") * n);
+}
+
+// The steady rack position: the engine delivers torque c x rack (c = mean injector health,
+// cylinders 1..injectors_out cut) and at rest torque = electrical power (no losses modelled).
+double steady_rack_pu(const PlantModel& p) {
+  const int n = static_cast<int>(std::lround(p.param("engine.cylinders")));
+  const int out = static_cast<int>(std::lround(p.param("engine.injectors_out")));
+  double sum = 0.0;
+  for (int k = 0; k < n; ++k) sum += k < out ? 0.0 : p.param(fmt::format("engine.injector_{}", k + 1));
+  const double c = sum / n;
+  return p.param("op.power_kw") / p.param("op.rated_kw") / std::max(c, 1e-9);
+}
+
+void map_effect(const diagnose::AppliedEffect& e, const diagnose::HypothesisFit& h,
+                const PlantModel& plant, const ident::TransferFunction& baseline, Mapper& m) {
+  const std::string name = diagnose::to_string(e.effect);
+  const auto& p = e.params;
+  switch (e.effect) {
+    case Effect::kDeadTime: {
+      const double td0 = effective_dead_time_s(plant);
+      m.set("engine.dead_time_s", std::max(td0 + p[0], 1e-4), name,
+            fmt::format("fuel dead time {:.4g} s + extra_delay_s {:.4g} s", td0, p[0]));
+      break;
+    }
+    case Effect::kExtraLag:
+      m.set("engine.combustion_lag_s", m.current("engine.combustion_lag_s") + p[0], name,
+            fmt::format("combustion lag + time_constant_s {:.4g} s (lags add)", p[0]));
+      break;
+    case Effect::kSensorLag:
+      m.set("meas.transducer_lag_s", m.current("meas.transducer_lag_s") + p[0], name,
+            fmt::format("transducer lag + time_constant_s {:.4g} s (lags add)", p[0]));
+      break;
+    case Effect::kAcCoupling:
+      m.set("meas.ac_rc_s", p[0], name, fmt::format("rc_s {:.4g} s", p[0]));
+      break;
+    case Effect::kGainChange:
+      m.set("meas.gain", m.current("meas.gain") * p[0], name,
+            fmt::format("transducer gain x gain_ratio {:.4g}", p[0]));
+      break;
+    case Effect::kDeadband: {
+      const double r = plant.param("gov.r_pu");
+      m.set("gov.deadband_pu", m.current("gov.deadband_pu") + r * p[0] / 100.0, name,
+            fmt::format("half_width {:.4g} % of bias x R {:.4g} / 100 on the error e", p[0], r));
+      break;
+    }
+    case Effect::kBacklash:
+      m.set("gov.backlash_pu", m.current("gov.backlash_pu") + 2.0 * p[0] / 100.0, name,
+            fmt::format("play width 2 x half_width {:.4g} % / 100 on the rack", p[0]));
+      break;
+    case Effect::kRateLimit:
+      m.set("gov.rate_limit_pu_s", p[0] / 100.0, name,
+            fmt::format("rate_limit_per_s {:.4g} %/s / 100 on the actuator", p[0]));
+      break;
+    case Effect::kSaturation: {
+      const double rack0 = steady_rack_pu(plant);
+      m.set("gov.tmax_pu", rack0 + p[0] / 100.0, name,
+            fmt::format("steady rack {:.4g} pu + upper_limit {:.4g} % / 100", rack0, p[0]));
+      m.set("gov.tmin_pu", rack0 - p[1] / 100.0, name,
+            fmt::format("steady rack {:.4g} pu - lower_limit_magnitude {:.4g} % / 100", rack0,
+                        p[1]));
+      break;
+    }
+    case Effect::kLoadDamping: {
+      const auto mode = diagnose::dominant_mode(baseline);
+      if (!mode || !(mode->second > 0.0)) {
+        m.note("load_damping: the baseline has no damped pole pair; alt.d_pu left unchanged");
+        break;
+      }
+      m.set("alt.d_pu", m.current("alt.d_pu") * p[0] / mode->second, name,
+            fmt::format("D x zeta {:.4g} / baseline zeta {:.4g} ({:.3g} Hz mode)", p[0],
+                        mode->second, mode->first));
+      break;
+    }
+    case Effect::kPeriodicDisturbance: {
+      const double a = derived_value(h, "amplitude", m.current("meas.pickup_kw"));
+      m.set("meas.pickup_hz", p[0], name, fmt::format("freq_hz {:.6g}", p[0]));
+      m.set("meas.pickup_kw", a, name, fmt::format("fitted amplitude {:.4g} kW", a));
+      break;
+    }
+    case Effect::kDrift: {
+      m.set("meas.drift_tau_s", p[0], name, fmt::format("time_constant_s {:.4g}", p[0]));
+      const double rms = derived_value(h, "drift_rms", m.current("meas.drift_kw"));
+      m.set("meas.drift_kw", rms, name, fmt::format("fitted drift rms {:.4g} kW", rms));
+      break;
+    }
+    case Effect::kResonance:
+    case Effect::kStaticNonlinearity:
+    case Effect::kNonlinearStiffness:
+    case Effect::kCoulombFriction:
+      m.note(fmt::format("{}: no plant parameter expresses it; see augmented_model.json", name));
+      break;
+  }
+}
+
+}  // namespace
+
+double PlantModel::param(const std::string& key) const {
+  const auto it = params.find(key);
+  if (it == params.end())
+    throw io::InputError(toml.string(), 0, key, "plantsim --list-params did not list this key");
+  return it->second;
+}
+
+PlantMapping plant_changes(const diagnose::HypothesisFit& hypothesis, const PlantModel& plant,
+                           const ident::TransferFunction& baseline) {
+  PlantMapping out;
+  Mapper m(plant, &out);
+  for (const auto& e : hypothesis.effects) map_effect(e, hypothesis, plant, baseline, m);
+  return out;
+}
+
+std::string augmented_plant_toml(const std::filesystem::path& input, const PlantMapping& mapping,
+                                 const std::vector<std::string>& summary) {
+  toml::table root;
+  try {
+    root = toml::parse_file(input.string());
+  } catch (const toml::parse_error& e) {
+    throw io::InputError(input.string(), static_cast<long>(e.source().begin.line), "",
+                         std::string("malformed TOML: ") + std::string(e.description()));
+  }
+  std::ostringstream text;
+  text << "# Plant written by `rig diagnose` from " << input.filename().string() << ".\n";
+  for (const auto& s : summary) text << "# " << s << "\n";
+  if (mapping.changes.empty()) text << "# No plant parameter changed.\n";
+  for (const auto& c : mapping.changes) {
+    const auto dot = c.key.find('.');
+    const std::string block = c.key.substr(0, dot), name = c.key.substr(dot + 1);
+    if (!root.contains(block)) root.insert(block, toml::table{});
+    root[block].as_table()->insert_or_assign(name, c.new_value);
+    text << fmt::format("# Changed {}: {:.6g} -> {:.6g} ({}: {}).\n", c.key, c.old_value,
+                        c.new_value, c.effect, c.reason);
+  }
+  for (const auto& n : mapping.notes) text << "# Note: " << n << "\n";
+  text << "# The original file's comments are not kept; `plantsim --list-params` describes\n"
+          "# every key.\n\n";
+  // Shortest round-trip floats (0.05, not 0.050000000000000003).
+  text << toml::toml_formatter{root, toml::toml_formatter::default_flags |
+                                         toml::format_flags::relaxed_float_precision}
+       << "\n";
+  return text.str();
+}
+
+}  // namespace rig::cli

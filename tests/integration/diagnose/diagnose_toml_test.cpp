@@ -1,0 +1,156 @@
+// `rig diagnose --model PLANT.toml` as a process (build/bin/rig, which runs the plantsim
+// beside it): a recording of the emulated plant (plantsim in-process, CVODE) with one
+// parameter changed, diagnosed against the unchanged preset TOML. Checks the verdict, the
+// augmented plant TOML (the right key, within 20 % of the truth) and the plant check.
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <toml++/toml.h>
+#include <vector>
+
+#include "plantsim/plant/plant.hpp"
+#include "rig/io/sidecar.hpp"
+#include "rig/signal/excitation.hpp"
+
+namespace fs = std::filesystem;
+
+namespace {
+
+fs::path bin_dir() {
+  const char* b = std::getenv("RIG_BIN_DIR");
+  return b ? b : "build/bin";
+}
+fs::path source_dir() {
+  const char* s = std::getenv("RIG_SOURCE_DIR");
+  return s ? s : ".";
+}
+
+// 10 ms ticks, +-3 sigma Gaussian bias (0.8 %, 4 Hz), the preset's own noise, drift, pick-up
+// and ripple; rec.csv (t,u,y) and its sidecar with the units.
+void write_plant_recording(const fs::path& dir, const std::vector<std::string>& faults,
+                           std::uint64_t seed, double duration_s) {
+  plantsim::PlantOptions po;
+  po.faults = faults;
+  po.seed = seed;
+  po.tick = std::chrono::milliseconds(10);
+  auto plant = plantsim::make_plant(po);
+  const Eigen::Index n = static_cast<Eigen::Index>(duration_s / 0.01);
+  rig::signal::GaussianOptions go;
+  go.n = n, go.dt_s = 0.01, go.bandwidth_hz = 4.0, go.sigma = 0.8, go.clip_sigma = 3.0,
+  go.seed = seed;
+  const Eigen::VectorXd u = rig::signal::gaussian_excitation(go);
+  for (int k = 0; k < 500; ++k) plant->step();  // settle at the operating point
+  std::ofstream csv(dir / "rec.csv");
+  csv.precision(10);
+  csv << "t,u,y\n";
+  for (Eigen::Index k = 0; k < n; ++k) {
+    plant->set_bias_pct(u(k));
+    csv << static_cast<double>(k) * 0.01 << ',' << u(k) << ','
+        << plant->measure().power_w / 1e3 << '\n';
+    plant->step();
+  }
+  rig::io::Sidecar sc;
+  sc.sample_rate_hz = 100.0;
+  sc.units = {{"t", "s"}, {"u", "%"}, {"y", "kW"}};
+  sc.seed = seed;
+  rig::io::write_sidecar(dir / "rec.json", sc);
+  std::printf("recording: faults [%s] seed %llu, %.0f s\n",
+              faults.empty() ? "" : faults.front().c_str(),
+              static_cast<unsigned long long>(seed), duration_s);
+}
+
+struct RigRun {
+  int code = -1;
+  std::string output;
+};
+
+RigRun run_rig(const std::string& args) {
+  const std::string cmd = (bin_dir() / "rig").string() + " diagnose " + args + " 2>&1";
+  RigRun r;
+  FILE* p = popen(cmd.c_str(), "r");
+  if (!p) return r;
+  char buf[512];
+  while (std::fgets(buf, sizeof buf, p)) r.output += buf;
+  const int status = pclose(p);
+  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  std::printf("$ rig diagnose %s\n%s", args.c_str(), r.output.c_str());
+  return r;
+}
+
+class DiagnoseToml : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    if (!fs::exists(bin_dir() / "rig") || !fs::exists(bin_dir() / "plantsim"))
+      GTEST_SKIP() << "rig/plantsim executables not built in " << bin_dir();
+    dir_ = fs::temp_directory_path() / ("rig_diagnose_toml_" + std::to_string(::getpid()));
+    fs::create_directories(dir_);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+
+  std::string args(const fs::path& model) const {
+    return "--recording " + (dir_ / "rec.csv").string() + " --model " + model.string() +
+           " --out " + (dir_ / "out").string();
+  }
+  nlohmann::json report() const {
+    std::ifstream in(dir_ / "out" / "report.json");
+    return nlohmann::json::parse(in);
+  }
+
+  fs::path dir_;
+};
+
+// Fuel dead time 58.3 ms (the preset's 30/N + 60/(n N)) raised to 90 ms.
+TEST_F(DiagnoseToml, LongerFuelDeadTimeGoesBackIntoThePlant) {
+  write_plant_recording(dir_, {"engine.dead_time_s=0.09@t=0"}, 11, 150.0);
+  const RigRun r = run_rig(args(source_dir() / "plantsim/presets/stornoway.toml"));
+  ASSERT_EQ(r.code, 0) << r.output;
+  const nlohmann::json j = report();
+  ASSERT_EQ(j["verdict"], "dead_time");
+  const toml::table aug = toml::parse_file((dir_ / "out" / "augmented_plant.toml").string());
+  const auto td = aug["engine"]["dead_time_s"].value<double>();
+  ASSERT_TRUE(td.has_value());
+  EXPECT_NEAR(*td, 0.09, 0.09 * 0.2);
+  EXPECT_EQ(j["plant_model"]["changes"][0]["key"], "engine.dead_time_s");
+  // Untouched keys keep their values.
+  EXPECT_EQ(aug["alt"]["d_pu"].value<double>(), 11.0);
+  const double before = j["plant_check"]["fit_before_pct"];
+  const double after = j["plant_check"]["fit_after_pct"];
+  EXPECT_GT(after, before + 5.0);
+}
+
+// Transducer gain error 0.9 on a plant file that starts from the preset and overrides a key.
+TEST_F(DiagnoseToml, TransducerGainErrorOnAPresetBasedFile) {
+  std::ofstream(dir_ / "plant.toml") << "preset = \"stornoway\"\n[meas]\nnoise_kw = 5\n";
+  write_plant_recording(dir_, {"meas.gain=0.9@t=0"}, 12, 150.0);
+  const RigRun r = run_rig(args(dir_ / "plant.toml"));
+  ASSERT_EQ(r.code, 0) << r.output;
+  const nlohmann::json j = report();
+  ASSERT_EQ(j["verdict"], "gain_change");
+  const toml::table aug = toml::parse_file((dir_ / "out" / "augmented_plant.toml").string());
+  EXPECT_EQ(aug["preset"].value<std::string>(), "stornoway");
+  const auto gain = aug["meas"]["gain"].value<double>();
+  ASSERT_TRUE(gain.has_value());
+  EXPECT_NEAR(*gain, 0.9, 0.9 * 0.2);
+  EXPECT_GT(j["plant_check"]["fit_after_pct"].get<double>(),
+            j["plant_check"]["fit_before_pct"].get<double>());
+}
+
+TEST_F(DiagnoseToml, PlantTheSimulatorRejectsIsOneLineExit2) {
+  write_plant_recording(dir_, {}, 13, 10.0);
+  std::ofstream(dir_ / "bad.toml") << "[gov]\nno_such_key = 1\n";
+  const RigRun r = run_rig(args(dir_ / "bad.toml"));
+  EXPECT_EQ(r.code, 2);
+  EXPECT_EQ(std::count(r.output.begin(), r.output.end(), '\n'), 1) << r.output;
+  EXPECT_NE(r.output.find("bad.toml"), std::string::npos);
+  EXPECT_NE(r.output.find("no_such_key"), std::string::npos);
+  EXPECT_FALSE(fs::exists(dir_ / "out" / "report.json"));
+}
+
+}  // namespace
