@@ -18,9 +18,12 @@
 //   backlash       half_width h (%)     gov.backlash_pu += 2 h/100 (plantsim's backlash_pu is
 //                                       the full play width on the rack: rack = xf -+ w/2)
 //   rate_limit     rate_limit_per_s r   gov.rate_limit_pu_s = r/100 (on the actuator rate)
-//   saturation     upper, lower (%)     gov.tmax_pu = rack0 + upper/100,
-//                                       gov.tmin_pu = rack0 - lower/100, rack0 = the steady
-//                                       rack (P0/P_r)/c, c = mean injector health
+//   (recovery_s of the in-loop limiters is the plant loop's own restoring time: not mapped)
+//   saturation     upper, lower (%)     gov.tmax_pu = rack0 + (u0 + upper)/100,
+//                                       gov.tmin_pu = rack0 + (u0 - lower)/100, rack0 = the
+//                                       steady rack (P0/P_r)/c at zero bias, c = mean injector
+//                                       health, u0 the recording's mean bias; a limit outside
+//                                       the recorded excursion is not identified: unchanged
 //   load_damping   zeta z               alt.d_pu *= z / zeta0 (swing-mode damping ratio is
 //                                       about proportional to D; zeta0 of the baseline's least
 //                                       damped pole pair)
@@ -111,8 +114,34 @@ double steady_rack_pu(const PlantModel& p) {
   return p.param("op.power_kw") / p.param("op.rated_kw") / std::max(c, 1e-9);
 }
 
+// Limits about the recording's mean input u0 (the operating point diagnose removes): the
+// rack there is rack0 + u0/100. A limit beyond the recorded excursion never acted, so the
+// fit did not identify it: that side is left as it was.
+void map_saturation(const std::vector<double>& p, const PlantModel& plant,
+                    const Eigen::VectorXd& u, Mapper& m) {
+  const double u0 = u.size() ? u.mean() : 0.0;
+  const double up = u.size() ? u.maxCoeff() - u0 : INFINITY;
+  const double down = u.size() ? u0 - u.minCoeff() : INFINITY;
+  const double rack = steady_rack_pu(plant) + u0 / 100.0;
+  const std::pair<const char*, double> sides[] = {{"upper_limit", p[0]},
+                                                  {"lower_limit_magnitude", p[1]}};
+  for (const auto& [word, lim] : sides) {
+    const bool upper = std::string(word) == "upper_limit";
+    const char* key = upper ? "gov.tmax_pu" : "gov.tmin_pu";
+    if (lim >= (upper ? up : down)) {
+      m.note(fmt::format("saturation: {} {:.4g} % lies beyond the recorded input ({:.4g} %); "
+                         "{} left unchanged", word, lim, upper ? up : down, key));
+      continue;
+    }
+    m.set(key, rack + (upper ? lim : -lim) / 100.0, "saturation",
+          fmt::format("rack at the mean bias {:.4g} pu {} {} {:.4g} % / 100", rack,
+                      upper ? "+" : "-", word, lim));
+  }
+}
+
 void map_effect(const diagnose::AppliedEffect& e, const diagnose::HypothesisFit& h,
-                const PlantModel& plant, const ident::TransferFunction& baseline, Mapper& m) {
+                const PlantModel& plant, const ident::TransferFunction& baseline,
+                const Eigen::VectorXd& u, Mapper& m) {
   const std::string name = diagnose::to_string(e.effect);
   const auto& p = e.params;
   switch (e.effect) {
@@ -151,15 +180,9 @@ void map_effect(const diagnose::AppliedEffect& e, const diagnose::HypothesisFit&
       m.set("gov.rate_limit_pu_s", p[0] / 100.0, name,
             fmt::format("rate_limit_per_s {:.4g} %/s / 100 on the actuator", p[0]));
       break;
-    case Effect::kSaturation: {
-      const double rack0 = steady_rack_pu(plant);
-      m.set("gov.tmax_pu", rack0 + p[0] / 100.0, name,
-            fmt::format("steady rack {:.4g} pu + upper_limit {:.4g} % / 100", rack0, p[0]));
-      m.set("gov.tmin_pu", rack0 - p[1] / 100.0, name,
-            fmt::format("steady rack {:.4g} pu - lower_limit_magnitude {:.4g} % / 100", rack0,
-                        p[1]));
+    case Effect::kSaturation:
+      map_saturation(p, plant, u, m);
       break;
-    }
     case Effect::kLoadDamping: {
       const auto mode = diagnose::dominant_mode(baseline);
       if (!mode || !(mode->second > 0.0)) {
@@ -202,10 +225,10 @@ double PlantModel::param(const std::string& key) const {
 }
 
 PlantMapping plant_changes(const diagnose::HypothesisFit& hypothesis, const PlantModel& plant,
-                           const ident::TransferFunction& baseline) {
+                           const ident::TransferFunction& baseline, const Eigen::VectorXd& u) {
   PlantMapping out;
   Mapper m(plant, &out);
-  for (const auto& e : hypothesis.effects) map_effect(e, hypothesis, plant, baseline, m);
+  for (const auto& e : hypothesis.effects) map_effect(e, hypothesis, plant, baseline, u, m);
   return out;
 }
 

@@ -70,9 +70,10 @@ struct PlantMapping {
 };
 
 // The parameters that express a hypothesis' effects in the plant (table in
-// diagnose_plant.cpp). `baseline` is the model the effects were fitted against.
+// diagnose_plant.cpp). `baseline` is the model the effects were fitted against; `u` the
+// recorded input (its mean is the operating bias the input limits are relative to).
 PlantMapping plant_changes(const diagnose::HypothesisFit& hypothesis, const PlantModel& plant,
-                           const ident::TransferFunction& baseline);
+                           const ident::TransferFunction& baseline, const Eigen::VectorXd& u);
 
 // The input TOML with the changes applied (toml++; the original's comments are not kept)
 // and a comment header naming each change and why; `summary` lines go into the header.

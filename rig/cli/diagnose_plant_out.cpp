@@ -76,7 +76,7 @@ json plant_check(const PlantOutputInput& in, const std::filesystem::path& augmen
 json write_plant_outputs(const PlantOutputInput& in, std::vector<std::string>* summary) {
   const diagnose::HypothesisFit* chosen = in.result.chosen();
   PlantMapping mapping;
-  if (chosen) mapping = plant_changes(*chosen, in.plant, in.baseline);
+  if (chosen) mapping = plant_changes(*chosen, in.plant, in.baseline, in.u);
   std::vector<std::string> header{fmt::format("Recording {}: verdict {}{}.", in.recording,
                                               in.result.verdict,
                                               chosen ? fmt::format(" (validation fit {:.1f} -> "

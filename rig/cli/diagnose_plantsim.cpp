@@ -149,7 +149,7 @@ Eigen::VectorXd replay_plant(const std::filesystem::path& plantsim,
     std::ofstream f(in);
     f << "t,u\n";
     for (Eigen::Index k = 0; k < u.size(); ++k)
-      f << fmt::format("{:.9g},{:.9g}\n", static_cast<double>(k) * dt_s, u(k));
+      f << fmt::format("{:.9g},{:.17g}\n", static_cast<double>(k) * dt_s, u(k));
     if (!f) throw std::runtime_error(fmt::format("{}: cannot write", in.string()));
   }
   const ProcessResult r = run_process({plantsim.string(), "--config", toml.string(), "--replay",
