@@ -62,9 +62,9 @@ double sample_period(const std::vector<double>& t, const std::string& file) {
   }
   for (std::size_t k = 1; k < t.size(); ++k) {
     if (std::abs(t[k] - t[k - 1] - dt) > 0.01 * dt) {
-      throw ConfigError(fmt::format(
-          "{}: column 't': step {} s at row {}, expected uniform sampling at {} s", file,
-          t[k] - t[k - 1], k + 1, dt));
+      throw ConfigError(
+          fmt::format("{}: column 't': step {} s at row {}, expected uniform sampling at {} s",
+                      file, t[k] - t[k - 1], k + 1, dt));
     }
   }
   return dt;

@@ -151,9 +151,17 @@ int run_diagnose(const DiagnoseArgs& a) {
   nlohmann::json doc = diagnose::report_json(r, ctx);
   std::vector<std::string> plant_lines;
   if (plant) {
-    const PlantOutputInput pi{*plant, *tmp, r, model.tf, di.u, di.y, rec.dt_s,
-                              plant_rc > 0.0 ? std::nullopt : chain_rc, a.out,
-                              a.recording.string(), !a.no_plant_check};
+    const PlantOutputInput pi{*plant,
+                              *tmp,
+                              r,
+                              model.tf,
+                              di.u,
+                              di.y,
+                              rec.dt_s,
+                              plant_rc > 0.0 ? std::nullopt : chain_rc,
+                              a.out,
+                              a.recording.string(),
+                              !a.no_plant_check};
     doc.update(write_plant_outputs(pi, &plant_lines));
   }
   report::write_json_file(a.out / "report.json", doc);

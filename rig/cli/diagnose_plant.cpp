@@ -37,12 +37,12 @@
 #include "rig/cli/diagnose_plant.hpp"
 
 #include <fmt/format.h>
+#include <toml++/toml.h>
 
 #include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <sstream>
-#include <toml++/toml.h>
 
 #include "rig/diagnose/augmented_model.hpp"
 #include "rig/io/input_error.hpp"
@@ -109,7 +109,8 @@ double steady_rack_pu(const PlantModel& p) {
   const int n = static_cast<int>(std::lround(p.param("engine.cylinders")));
   const int out = static_cast<int>(std::lround(p.param("engine.injectors_out")));
   double sum = 0.0;
-  for (int k = 0; k < n; ++k) sum += k < out ? 0.0 : p.param(fmt::format("engine.injector_{}", k + 1));
+  for (int k = 0; k < n; ++k)
+    sum += k < out ? 0.0 : p.param(fmt::format("engine.injector_{}", k + 1));
   const double c = sum / n;
   return p.param("op.power_kw") / p.param("op.rated_kw") / std::max(c, 1e-9);
 }
@@ -117,8 +118,8 @@ double steady_rack_pu(const PlantModel& p) {
 // Limits about the recording's mean input u0 (the operating point diagnose removes): the
 // rack there is rack0 + u0/100. A limit beyond the recorded excursion never acted, so the
 // fit did not identify it: that side is left as it was.
-void map_saturation(const std::vector<double>& p, const PlantModel& plant,
-                    const Eigen::VectorXd& u, Mapper& m) {
+void map_saturation(const std::vector<double>& p, const PlantModel& plant, const Eigen::VectorXd& u,
+                    Mapper& m) {
   const double u0 = u.size() ? u.mean() : 0.0;
   const double up = u.size() ? u.maxCoeff() - u0 : INFINITY;
   const double down = u.size() ? u0 - u.minCoeff() : INFINITY;
@@ -129,13 +130,43 @@ void map_saturation(const std::vector<double>& p, const PlantModel& plant,
     const bool upper = std::string(word) == "upper_limit";
     const char* key = upper ? "gov.tmax_pu" : "gov.tmin_pu";
     if (lim >= (upper ? up : down)) {
-      m.note(fmt::format("saturation: {} {:.4g} % lies beyond the recorded input ({:.4g} %); "
-                         "{} left unchanged", word, lim, upper ? up : down, key));
+      m.note(
+          fmt::format("saturation: {} {:.4g} % lies beyond the recorded input ({:.4g} %); "
+                      "{} left unchanged",
+                      word, lim, upper ? up : down, key));
       continue;
     }
     m.set(key, rack + (upper ? lim : -lim) / 100.0, "saturation",
           fmt::format("rack at the mean bias {:.4g} pu {} {} {:.4g} % / 100", rack,
                       upper ? "+" : "-", word, lim));
+  }
+}
+
+// The input nonlinearities act at the governor: on e (deadband) or the rack (the rest).
+void map_governor_effect(const diagnose::AppliedEffect& e, const PlantModel& plant,
+                         const Eigen::VectorXd& u, Mapper& m) {
+  const std::string name = diagnose::to_string(e.effect);
+  const auto& p = e.params;
+  switch (e.effect) {
+    case Effect::kDeadband: {
+      const double r = plant.param("gov.r_pu");
+      m.set("gov.deadband_pu", m.current("gov.deadband_pu") + r * p[0] / 100.0, name,
+            fmt::format("half_width {:.4g} % of bias x R {:.4g} / 100 on the error e", p[0], r));
+      break;
+    }
+    case Effect::kBacklash:
+      m.set("gov.backlash_pu", m.current("gov.backlash_pu") + 2.0 * p[0] / 100.0, name,
+            fmt::format("play width 2 x half_width {:.4g} % / 100 on the rack", p[0]));
+      break;
+    case Effect::kRateLimit:
+      m.set("gov.rate_limit_pu_s", p[0] / 100.0, name,
+            fmt::format("rate_limit_per_s {:.4g} %/s / 100 on the actuator", p[0]));
+      break;
+    case Effect::kSaturation:
+      map_saturation(p, plant, u, m);
+      break;
+    default:
+      break;
   }
 }
 
@@ -166,22 +197,11 @@ void map_effect(const diagnose::AppliedEffect& e, const diagnose::HypothesisFit&
       m.set("meas.gain", m.current("meas.gain") * p[0], name,
             fmt::format("transducer gain x gain_ratio {:.4g}", p[0]));
       break;
-    case Effect::kDeadband: {
-      const double r = plant.param("gov.r_pu");
-      m.set("gov.deadband_pu", m.current("gov.deadband_pu") + r * p[0] / 100.0, name,
-            fmt::format("half_width {:.4g} % of bias x R {:.4g} / 100 on the error e", p[0], r));
-      break;
-    }
+    case Effect::kDeadband:
     case Effect::kBacklash:
-      m.set("gov.backlash_pu", m.current("gov.backlash_pu") + 2.0 * p[0] / 100.0, name,
-            fmt::format("play width 2 x half_width {:.4g} % / 100 on the rack", p[0]));
-      break;
     case Effect::kRateLimit:
-      m.set("gov.rate_limit_pu_s", p[0] / 100.0, name,
-            fmt::format("rate_limit_per_s {:.4g} %/s / 100 on the actuator", p[0]));
-      break;
     case Effect::kSaturation:
-      map_saturation(p, plant, u, m);
+      map_governor_effect(e, plant, u, m);
       break;
     case Effect::kLoadDamping: {
       const auto mode = diagnose::dominant_mode(baseline);

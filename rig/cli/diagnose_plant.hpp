@@ -5,16 +5,14 @@
 // are mapped back onto plant parameters (plant_changes()) and written as a plant TOML.
 #pragma once
 
+#include <Eigen/Core>
 #include <filesystem>
 #include <map>
+#include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
 #include <utility>
 #include <vector>
-
-#include <Eigen/Core>
-
-#include <nlohmann/json.hpp>
 
 #include "rig/diagnose/diagnose.hpp"
 #include "rig/ident/transfer_function.hpp"
@@ -44,12 +42,12 @@ class TempDir {
 };
 
 struct PlantModel {
-  std::filesystem::path toml;                  // the plant as given
-  std::filesystem::path plantsim;              // the executable used
-  io::ModelFile linear;                        // plantsim --linearise (bias % -> kW)
-  std::map<std::string, double> params;        // resolved "block.name" -> value
+  std::filesystem::path toml;                               // the plant as given
+  std::filesystem::path plantsim;                           // the executable used
+  io::ModelFile linear;                                     // plantsim --linearise (bias % -> kW)
+  std::map<std::string, double> params;                     // resolved "block.name" -> value
   std::map<std::string, std::pair<double, double>> ranges;  // valid range per key
-  double param(const std::string& key) const;  // InputError naming the key when absent
+  double param(const std::string& key) const;               // InputError naming the key when absent
 };
 
 // Linearises and lists the plant with `plantsim`; InputError naming `toml` (one line, with

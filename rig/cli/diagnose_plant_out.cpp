@@ -44,8 +44,8 @@ Eigen::VectorXd replay(const PlantOutputInput& in, const std::filesystem::path& 
 }
 
 // Replays both plants; the `plant_check` object (or its error) and the summary line.
-json plant_check(const PlantOutputInput& in, const std::filesystem::path& augmented,
-                 bool changed, std::vector<std::string>* summary) {
+json plant_check(const PlantOutputInput& in, const std::filesystem::path& augmented, bool changed,
+                 std::vector<std::string>* summary) {
   const Eigen::Index from = in.result.warmup;
   try {
     const Eigen::VectorXd before = replay(in, in.plant.toml);
@@ -57,9 +57,10 @@ json plant_check(const PlantOutputInput& in, const std::filesystem::path& augmen
     for (Eigen::Index k = 0; k < in.u.size(); ++k)
       csv << fmt::format("{:.9g},{:.9g},{:.9g},{:.9g},{:.9g}\n", static_cast<double>(k) * in.dt_s,
                          in.u(k), in.y(k), before(k), after(k));
-    summary->push_back(fmt::format(
-        "plant check (plantsim replay, no noise): fit {:.1f} % -> {:.1f} % with the augmented plant",
-        fb, fa));
+    summary->push_back(
+        fmt::format("plant check (plantsim replay, no noise): fit {:.1f} % -> {:.1f} % with the "
+                    "augmented plant",
+                    fb, fa));
     return {{"fit_before_pct", fb},
             {"fit_after_pct", fa},
             {"warmup_s", static_cast<double>(from) * in.dt_s},
@@ -77,13 +78,12 @@ json write_plant_outputs(const PlantOutputInput& in, std::vector<std::string>* s
   const diagnose::HypothesisFit* chosen = in.result.chosen();
   PlantMapping mapping;
   if (chosen) mapping = plant_changes(*chosen, in.plant, in.baseline, in.u);
-  std::vector<std::string> header{fmt::format("Recording {}: verdict {}{}.", in.recording,
-                                              in.result.verdict,
-                                              chosen ? fmt::format(" (validation fit {:.1f} -> "
-                                                                   "{:.1f} %)",
-                                                                   chosen->validation_fit_before,
-                                                                   chosen->validation_fit_after)
-                                                     : std::string())};
+  std::vector<std::string> header{
+      fmt::format("Recording {}: verdict {}{}.", in.recording, in.result.verdict,
+                  chosen ? fmt::format(" (validation fit {:.1f} -> "
+                                       "{:.1f} %)",
+                                       chosen->validation_fit_before, chosen->validation_fit_after)
+                         : std::string())};
   const std::filesystem::path augmented = in.out_dir / "augmented_plant.toml";
   {
     std::ofstream f(augmented);
@@ -92,8 +92,8 @@ json write_plant_outputs(const PlantOutputInput& in, std::vector<std::string>* s
   }
   std::string changed;
   for (const auto& c : mapping.changes)
-    changed += fmt::format("{}{} {:.4g} -> {:.4g}", changed.empty() ? "" : ", ", c.key,
-                           c.old_value, c.new_value);
+    changed += fmt::format("{}{} {:.4g} -> {:.4g}", changed.empty() ? "" : ", ", c.key, c.old_value,
+                           c.new_value);
   summary->push_back(fmt::format("plant: {} ({})", augmented.string(),
                                  changed.empty() ? "no parameter changed" : changed));
   json out;

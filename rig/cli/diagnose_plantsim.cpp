@@ -1,11 +1,11 @@
 // The plantsim subprocess behind `rig diagnose --model PLANT.toml` (diagnose_plant.hpp).
 #include <fcntl.h>
+#include <fmt/format.h>
 #include <spawn.h>
 #include <stdlib.h>
 #include <sys/wait.h>
+#include <toml++/toml.h>
 #include <unistd.h>
-
-#include <fmt/format.h>
 
 #include <cerrno>
 #include <cstring>
@@ -13,7 +13,6 @@
 #include <regex>
 #include <sstream>
 #include <stdexcept>
-#include <toml++/toml.h>
 
 #include "rig/cli/diagnose_plant.hpp"
 #include "rig/io/input_error.hpp"
@@ -39,9 +38,9 @@ std::string last_line(const std::string& output) {
 std::string run_plantsim(const std::filesystem::path& toml, std::vector<std::string> argv) {
   const ProcessResult r = run_process(argv);
   if (r.exit_code != 0)
-    throw io::InputError(toml.string(), 0, "",
-                         fmt::format("plantsim rejected the plant (exit {}): {}", r.exit_code,
-                                     last_line(r.output)));
+    throw io::InputError(
+        toml.string(), 0, "",
+        fmt::format("plantsim rejected the plant (exit {}): {}", r.exit_code, last_line(r.output)));
   return r.output;
 }
 
@@ -69,7 +68,8 @@ void read_params(const std::string& text, const std::filesystem::path& toml, Pla
   std::string line, block;
   std::smatch mt;
   while (std::getline(in, line)) {
-    if (std::regex_search(line, mt, section)) block = mt[1];
+    if (std::regex_search(line, mt, section))
+      block = mt[1];
     else if (std::regex_search(line, mt, entry))
       m->ranges[block + "." + mt[1].str()] = {std::stod(mt[2]), std::stod(mt[3])};
   }
@@ -100,8 +100,10 @@ ProcessResult run_process(const std::vector<std::string>& args) {
   char buf[4096];
   for (;;) {
     const ssize_t n = read(fds[0], buf, sizeof buf);
-    if (n > 0) out.output.append(buf, static_cast<std::size_t>(n));
-    else if (n == 0 || errno != EINTR) break;
+    if (n > 0)
+      out.output.append(buf, static_cast<std::size_t>(n));
+    else if (n == 0 || errno != EINTR)
+      break;
   }
   close(fds[0]);
   int status = 0;
@@ -114,8 +116,8 @@ ProcessResult run_process(const std::vector<std::string>& args) {
 TempDir::TempDir() {
   std::string tmpl = (std::filesystem::temp_directory_path() / "rig-diagnose-XXXXXX").string();
   if (mkdtemp(tmpl.data()) == nullptr)
-    throw std::runtime_error(fmt::format("cannot create a temporary folder: {}",
-                                         std::strerror(errno)));
+    throw std::runtime_error(
+        fmt::format("cannot create a temporary folder: {}", std::strerror(errno)));
   path_ = tmpl;
 }
 
@@ -162,8 +164,8 @@ Eigen::VectorXd replay_plant(const std::filesystem::path& plantsim,
   ro.read_sidecar = false;
   const io::Recording rec = io::read_recording(out, ro);
   if (rec.rows() != u.size())
-    throw std::runtime_error(fmt::format("{}: {} rows, expected {}", out.string(), rec.rows(),
-                                         u.size()));
+    throw std::runtime_error(
+        fmt::format("{}: {} rows, expected {}", out.string(), rec.rows(), u.size()));
   return rec.column("power_kw");
 }
 

@@ -3,6 +3,7 @@
 // parameter changed, diagnosed against the unchanged preset TOML. Checks the verdict, the
 // augmented plant TOML (the right key, within 20 % of the truth) and the plant check.
 #include <gtest/gtest.h>
+#include <toml++/toml.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -12,7 +13,6 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <string>
-#include <toml++/toml.h>
 #include <vector>
 
 #include "plantsim/plant/plant.hpp"
@@ -52,8 +52,8 @@ void write_plant_recording(const fs::path& dir, const std::vector<std::string>& 
   csv << "t,u,y\n";
   for (Eigen::Index k = 0; k < n; ++k) {
     plant->set_bias_pct(u(k));
-    csv << static_cast<double>(k) * 0.01 << ',' << u(k) << ','
-        << plant->measure().power_w / 1e3 << '\n';
+    csv << static_cast<double>(k) * 0.01 << ',' << u(k) << ',' << plant->measure().power_w / 1e3
+        << '\n';
     plant->step();
   }
   rig::io::Sidecar sc;
@@ -62,8 +62,8 @@ void write_plant_recording(const fs::path& dir, const std::vector<std::string>& 
   sc.seed = seed;
   rig::io::write_sidecar(dir / "rec.json", sc);
   std::printf("recording: faults [%s] seed %llu, %.0f s\n",
-              faults.empty() ? "" : faults.front().c_str(),
-              static_cast<unsigned long long>(seed), duration_s);
+              faults.empty() ? "" : faults.front().c_str(), static_cast<unsigned long long>(seed),
+              duration_s);
 }
 
 struct RigRun {
@@ -97,8 +97,8 @@ class DiagnoseToml : public ::testing::Test {
   void TearDown() override { fs::remove_all(dir_); }
 
   std::string args(const fs::path& model) const {
-    return "--recording " + (dir_ / "rec.csv").string() + " --model " + model.string() +
-           " --out " + (dir_ / "out").string();
+    return "--recording " + (dir_ / "rec.csv").string() + " --model " + model.string() + " --out " +
+           (dir_ / "out").string();
   }
   nlohmann::json report() const {
     std::ifstream in(dir_ / "out" / "report.json");
@@ -196,9 +196,9 @@ TEST_F(DiagnoseToml, ReplayIsThePlantsNoiseFreeResponse) {
   EXPECT_LT(max_err, 1e-3);
   EXPECT_GT(hi - lo, 100.0);  // the bias (1 % rms) moves the set by about 46 kW per %
 
-  const RigRun bad = run_bin("plantsim", "--config " + plant + " --replay " +
-                                             (dir_ / "in.csv").string() + " --replay-out " +
-                                             (dir_ / "o2.csv").string());
+  const RigRun bad =
+      run_bin("plantsim", "--config " + plant + " --replay " + (dir_ / "in.csv").string() +
+                              " --replay-out " + (dir_ / "o2.csv").string());
   EXPECT_EQ(bad.code, 2);
   EXPECT_NE(bad.output.find("no column 'u'"), std::string::npos) << bad.output;
 }
