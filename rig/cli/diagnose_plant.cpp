@@ -1,10 +1,12 @@
 // From diagnosed effects to plantsim parameters. The baseline transfer function is plantsim's
 // linearisation: input u = setpoint bias in % of rated power P_r, output y = measured power
 // in kW. In the governor (DESIGN.md 7, plantsim/plant/governor.hpp) the bias b = u/100 pu
-// enters the error as e = Pref + R b - g dw - R Pe_f, and with R K T4 = 1 the actuator
-// follows the bias one to one between 1/T4 and 1/T1 (rack change 0.01 pu per % of bias, 1 %
-// of rated power once the engine delivers it). So on the rack and its rate, 1 % of bias is
-// 0.01 pu; on the error e it is R x 0.01 pu. The table (effect parameter -> plant key):
+// enters the error as e = Pref + R b - g dw - R Pe_f. Between 1/T4 and 1/T1 (where the
+// excitation lives; T3 = T1 in the usual tuning) the actuator follows the bias with the gain
+// R K T4 (pu of rack per pu of bias; 1 for a kW-controlled set, where r_pu k t4_s = 1 makes
+// 1 % of bias 1 % of rated power). So 1 % of bias is a_r = R K T4 / 100 pu on the rack and
+// its rate (0.01 / c, the static value, when T4 = 0), and R / 100 pu on the error e.
+// The table (effect parameter -> plant key):
 //
 //   dead_time      extra_delay_s d      engine.dead_time_s = Td0 + d, Td0 the effective fuel
 //                                       dead time (dead_time_s if > 0, else 30/N + 60/(n N))
@@ -15,12 +17,12 @@
 //   gain_change    gain_ratio g         meas.gain *= g
 //   deadband       half_width h (%)     gov.deadband_pu += R h/100 (plantsim's deadband_pu is
 //                                       the half width on e: |e| <= db gives 0)
-//   backlash       half_width h (%)     gov.backlash_pu += 2 h/100 (plantsim's backlash_pu is
+//   backlash       half_width h (%)     gov.backlash_pu += 2 h a_r (plantsim's backlash_pu is
 //                                       the full play width on the rack: rack = xf -+ w/2)
-//   rate_limit     rate_limit_per_s r   gov.rate_limit_pu_s = r/100 (on the actuator rate)
+//   rate_limit     rate_limit_per_s r   gov.rate_limit_pu_s = r a_r (on the actuator rate)
 //   (recovery_s of the in-loop limiters is the plant loop's own restoring time: not mapped)
-//   saturation     upper, lower (%)     gov.tmax_pu = rack0 + (u0 + upper)/100,
-//                                       gov.tmin_pu = rack0 + (u0 - lower)/100, rack0 = the
+//   saturation     upper, lower (%)     gov.tmax_pu = rack0 + (u0 + upper) a_r,
+//                                       gov.tmin_pu = rack0 + (u0 - lower) a_r, rack0 = the
 //                                       steady rack (P0/P_r)/c at zero bias, c = mean injector
 //                                       health, u0 the recording's mean bias; a limit outside
 //                                       the recorded excursion is not identified: unchanged
@@ -103,27 +105,38 @@ double effective_dead_time_s(const PlantModel& p) {
   return 30.0 / n + 60.0 / (p.param("engine.cylinders") * n);
 }
 
-// The steady rack position: the engine delivers torque c x rack (c = mean injector health,
-// cylinders 1..injectors_out cut) and at rest torque = electrical power (no losses modelled).
-double steady_rack_pu(const PlantModel& p) {
+// c = mean injector health (cylinders 1..injectors_out cut): torque = c x rack.
+double cylinder_factor(const PlantModel& p) {
   const int n = static_cast<int>(std::lround(p.param("engine.cylinders")));
   const int out = static_cast<int>(std::lround(p.param("engine.injectors_out")));
   double sum = 0.0;
   for (int k = 0; k < n; ++k)
     sum += k < out ? 0.0 : p.param(fmt::format("engine.injector_{}", k + 1));
-  const double c = sum / n;
-  return p.param("op.power_kw") / p.param("op.rated_kw") / std::max(c, 1e-9);
+  return std::max(sum / n, 1e-9);
+}
+
+// The steady rack position: at rest torque = electrical power (no losses modelled).
+double steady_rack_pu(const PlantModel& p) {
+  return p.param("op.power_kw") / p.param("op.rated_kw") / cylinder_factor(p);
+}
+
+// Rack (pu) per % of bias at the excitation's frequencies: R K T4 / 100 (see the top).
+double rack_pu_per_pct(const PlantModel& p) {
+  const double t4 = p.param("gov.t4_s");
+  if (t4 > 0.0) return p.param("gov.r_pu") * p.param("gov.k") * t4 / 100.0;
+  return 0.01 / cylinder_factor(p);  // static: 1 % of rated power needs 0.01/c of rack
 }
 
 // Limits about the recording's mean input u0 (the operating point diagnose removes): the
-// rack there is rack0 + u0/100. A limit beyond the recorded excursion never acted, so the
+// rack there is rack0 + u0 a_r. A limit beyond the recorded excursion never acted, so the
 // fit did not identify it: that side is left as it was.
 void map_saturation(const std::vector<double>& p, const PlantModel& plant, const Eigen::VectorXd& u,
                     Mapper& m) {
   const double u0 = u.size() ? u.mean() : 0.0;
   const double up = u.size() ? u.maxCoeff() - u0 : INFINITY;
   const double down = u.size() ? u0 - u.minCoeff() : INFINITY;
-  const double rack = steady_rack_pu(plant) + u0 / 100.0;
+  const double a_r = rack_pu_per_pct(plant);
+  const double rack = steady_rack_pu(plant) + u0 * a_r;
   const std::pair<const char*, double> sides[] = {{"upper_limit", p[0]},
                                                   {"lower_limit_magnitude", p[1]}};
   for (const auto& [word, lim] : sides) {
@@ -136,9 +149,9 @@ void map_saturation(const std::vector<double>& p, const PlantModel& plant, const
                       word, lim, upper ? up : down, key));
       continue;
     }
-    m.set(key, rack + (upper ? lim : -lim) / 100.0, "saturation",
-          fmt::format("rack at the mean bias {:.4g} pu {} {} {:.4g} % / 100", rack,
-                      upper ? "+" : "-", word, lim));
+    m.set(key, rack + (upper ? lim : -lim) * a_r, "saturation",
+          fmt::format("rack at the mean bias {:.4g} pu {} {} {:.4g} % x {:.4g} pu/%", rack,
+                      upper ? "+" : "-", word, lim, a_r));
   }
 }
 
@@ -147,6 +160,7 @@ void map_governor_effect(const diagnose::AppliedEffect& e, const PlantModel& pla
                          const Eigen::VectorXd& u, Mapper& m) {
   const std::string name = diagnose::to_string(e.effect);
   const auto& p = e.params;
+  const double a_r = rack_pu_per_pct(plant);
   switch (e.effect) {
     case Effect::kDeadband: {
       const double r = plant.param("gov.r_pu");
@@ -155,12 +169,12 @@ void map_governor_effect(const diagnose::AppliedEffect& e, const PlantModel& pla
       break;
     }
     case Effect::kBacklash:
-      m.set("gov.backlash_pu", m.current("gov.backlash_pu") + 2.0 * p[0] / 100.0, name,
-            fmt::format("play width 2 x half_width {:.4g} % / 100 on the rack", p[0]));
+      m.set("gov.backlash_pu", m.current("gov.backlash_pu") + 2.0 * p[0] * a_r, name,
+            fmt::format("play width 2 x half_width {:.4g} % x {:.4g} pu/% on the rack", p[0], a_r));
       break;
     case Effect::kRateLimit:
-      m.set("gov.rate_limit_pu_s", p[0] / 100.0, name,
-            fmt::format("rate_limit_per_s {:.4g} %/s / 100 on the actuator", p[0]));
+      m.set("gov.rate_limit_pu_s", p[0] * a_r, name,
+            fmt::format("rate_limit_per_s {:.4g} %/s x {:.4g} pu/% on the actuator", p[0], a_r));
       break;
     case Effect::kSaturation:
       map_saturation(p, plant, u, m);

@@ -15,7 +15,10 @@
 #include <string>
 #include <vector>
 
+#include "plantsim/plant/config.hpp"
+#include "plantsim/plant/parameters.hpp"
 #include "plantsim/plant/plant.hpp"
+#include "rig/cli/diagnose_plant.hpp"
 #include "rig/io/sidecar.hpp"
 #include "rig/signal/excitation.hpp"
 
@@ -201,6 +204,90 @@ TEST_F(DiagnoseToml, ReplayIsThePlantsNoiseFreeResponse) {
                               " --replay-out " + (dir_ / "o2.csv").string());
   EXPECT_EQ(bad.code, 2);
   EXPECT_NE(bad.output.find("no column 'u'"), std::string::npos) << bad.output;
+}
+
+// The mapping table on its own: the preset's parameters (as plantsim --list-params gives
+// them) and hand-made hypotheses with known parameters.
+rig::cli::PlantModel stornoway_model() {
+  rig::cli::PlantModel m;
+  m.toml = "stornoway.toml";
+  const plantsim::Params p = plantsim::preset("stornoway");
+  const auto& specs = plantsim::param_specs();
+  for (std::size_t i = 0; i < specs.size(); ++i) {
+    m.params[std::string(specs[i].name)] = p[static_cast<plantsim::P>(i)];
+    m.ranges[std::string(specs[i].name)] = {specs[i].min_value, specs[i].max_value};
+  }
+  return m;
+}
+
+rig::cli::PlantMapping map(std::vector<rig::diagnose::AppliedEffect> effects,
+                           std::vector<std::pair<std::string, double>> derived = {}) {
+  rig::diagnose::HypothesisFit h;
+  h.effects = std::move(effects);
+  h.derived = std::move(derived);
+  const double w = 2.0 * 3.141592653589793 * 2.0;  // a 2 Hz mode with zeta 0.1
+  const rig::ident::TransferFunction tf{Eigen::VectorXd::Constant(1, w * w),
+                                        Eigen::Vector3d(1.0, 2.0 * 0.1 * w, w * w), 0.06};
+  const Eigen::VectorXd u = Eigen::VectorXd::LinSpaced(101, -2.0, 4.0);  // mean 1 %
+  return rig::cli::plant_changes(h, stornoway_model(), tf, u);
+}
+
+double changed(const rig::cli::PlantMapping& m, const std::string& key) {
+  for (const auto& c : m.changes)
+    if (c.key == key) return c.new_value;
+  ADD_FAILURE() << key << " not changed";
+  return NAN;
+}
+
+TEST(DiagnosePlantMapping, GovernorEffectsInRackAndErrorUnits) {
+  using E = rig::diagnose::Effect;
+  // Deadband half width 0.2 % of bias on e = R b: R 0.05 x 0.002 = 1e-4 pu.
+  EXPECT_NEAR(changed(map({{E::kDeadband, {0.2}}}), "gov.deadband_pu"), 1e-4, 1e-9);
+  // Backlash half width 0.5 %: play width 2 x 0.005 pu of rack (R K T4 = 1).
+  EXPECT_NEAR(changed(map({{E::kBacklash, {0.5}}}), "gov.backlash_pu"), 0.01, 1e-9);
+  EXPECT_NEAR(changed(map({{E::kRateLimit, {20.0, 0.5}}}), "gov.rate_limit_pu_s"), 0.2, 1e-9);
+  // Upper limit 1 % above the mean bias (1 %): rack 3500/4600 + 0.02; the lower limit 10 %
+  // lies beyond the recorded excursion (3 %) and stays.
+  const auto sat = map({{E::kSaturation, {1.0, 10.0, 0.01}}});
+  EXPECT_NEAR(changed(sat, "gov.tmax_pu"), 3500.0 / 4600.0 + 0.02, 1e-6);
+  EXPECT_EQ(sat.changes.size(), 1u);
+  ASSERT_EQ(sat.notes.size(), 1u);
+  EXPECT_NE(sat.notes[0].find("gov.tmin_pu left unchanged"), std::string::npos);
+}
+
+TEST(DiagnosePlantMapping, LinearEffectsDisturbancesAndPairs) {
+  using E = rig::diagnose::Effect;
+  // Fuel dead time 30/600 + 60/(12 x 600) = 58.3 ms plus 30 ms.
+  EXPECT_NEAR(changed(map({{E::kDeadTime, {0.03}}}), "engine.dead_time_s"), 0.0883333, 1e-6);
+  EXPECT_NEAR(changed(map({{E::kSensorLag, {0.077}}}), "meas.transducer_lag_s"), 0.08, 1e-9);
+  EXPECT_NEAR(changed(map({{E::kExtraLag, {0.042}}}), "engine.combustion_lag_s"), 0.05, 1e-9);
+  // Damping ratio 0.1 -> 0.05: D 11 -> 5.5.
+  EXPECT_NEAR(changed(map({{E::kLoadDamping, {0.05}}}), "alt.d_pu"), 5.5, 1e-4);
+  const auto pair = map({{E::kGainChange, {0.9}}, {E::kPeriodicDisturbance, {7.3}}},
+                        {{"amplitude", 12.0}, {"phase_deg", 30.0}});
+  EXPECT_NEAR(changed(pair, "meas.gain"), 0.9, 1e-9);
+  EXPECT_NEAR(changed(pair, "meas.pickup_hz"), 7.3, 1e-9);
+  EXPECT_NEAR(changed(pair, "meas.pickup_kw"), 12.0, 1e-9);
+  // Out of plantsim's range (ac_rc_s <= 1e4 s): clamped, with a note.
+  const auto ac = map({{E::kAcCoupling, {2e4}}});
+  EXPECT_EQ(changed(ac, "meas.ac_rc_s"), 1e4);
+  EXPECT_EQ(ac.notes.size(), 1u);
+  const auto res = map({{E::kResonance, {3.0, 0.1, 2.0}}});
+  EXPECT_TRUE(res.changes.empty());
+  EXPECT_EQ(res.notes.size(), 1u);
+}
+
+TEST(DiagnosePlantMapping, AugmentedTomlKeepsThePresetAndLoadsInPlantsim) {
+  const fs::path dir = fs::temp_directory_path() / ("rig_plant_map_" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  std::ofstream(dir / "in.toml") << "preset = \"stornoway\"  # base\n[meas]\nnoise_kw = 2\n";
+  const auto m = map({{rig::diagnose::Effect::kDeadTime, {0.03}}});
+  std::ofstream(dir / "out.toml") << rig::cli::augmented_plant_toml(dir / "in.toml", m, {"x"});
+  const plantsim::Params p = plantsim::load_toml(dir / "out.toml");
+  EXPECT_NEAR(p[plantsim::P::kEngDeadTime], 0.0883333, 1e-6);
+  EXPECT_EQ(p[plantsim::P::kMeasNoise], 2.0);  // kept from the input
+  EXPECT_EQ(p[plantsim::P::kAltD], 11.0);      // from the preset
+  fs::remove_all(dir);
 }
 
 }  // namespace
