@@ -91,9 +91,11 @@ Eigen::VectorXd apply_input(const Problem& pr, const AppliedEffect& e, Eigen::Ve
     case Effect::kBacklash:
       return backlash(v, p[0]);
     case Effect::kSaturation:
-      return saturate(v, -p[1], p[0]);
+      return p.size() > 2 ? saturate_in_loop(v, -p[1], p[0], p[2], pr.dt_s)
+                          : saturate(v, -p[1], p[0]);
     case Effect::kRateLimit:
-      return rate_limit(v, p[0], pr.dt_s);
+      return p.size() > 1 ? rate_limit_in_loop(v, p[0], p[1], pr.dt_s)
+                          : rate_limit(v, p[0], pr.dt_s);
     case Effect::kStaticNonlinearity:
       return polynomial(v, p[0], p[1], pr.scales.u_std);
     default:

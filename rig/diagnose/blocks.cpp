@@ -36,6 +36,37 @@ Eigen::VectorXd rate_limit(const Eigen::VectorXd& u, double rate_per_s, double d
   return v;
 }
 
+namespace {
+
+// One step of the integrating loop: the input's increment plus the recovery of the lost
+// position, (u_{k-1} - v_{k-1}) dt/T, at most all of it.
+template <class Limit>
+Eigen::VectorXd in_loop(const Eigen::VectorXd& u, double recovery_s, double dt_s, Limit limit) {
+  Eigen::VectorXd v(u.size());
+  if (u.size() == 0) return v;
+  const double a = std::min(1.0, dt_s / std::max(recovery_s, 1e-300));
+  v(0) = limit(u(0), 0.0);
+  for (Eigen::Index k = 1; k < u.size(); ++k)
+    v(k) = limit(v(k - 1), u(k) - u(k - 1) + a * (u(k - 1) - v(k - 1)));
+  return v;
+}
+
+}  // namespace
+
+Eigen::VectorXd rate_limit_in_loop(const Eigen::VectorXd& u, double rate_per_s, double recovery_s,
+                                   double dt_s) {
+  const double step = rate_per_s * dt_s;
+  return in_loop(u, recovery_s, dt_s,
+                 [step](double prev, double inc) { return prev + std::clamp(inc, -step, step); });
+}
+
+Eigen::VectorXd saturate_in_loop(const Eigen::VectorXd& u, double lower, double upper,
+                                 double recovery_s, double dt_s) {
+  return in_loop(u, recovery_s, dt_s, [lower, upper](double prev, double inc) {
+    return std::clamp(prev + inc, lower, std::max(lower, upper));
+  });
+}
+
 Eigen::VectorXd polynomial(const Eigen::VectorXd& u, double c2, double c3, double sigma) {
   const double s = std::max(sigma, 1e-300);
   return u.unaryExpr([=](double x) { return x + c2 * x * x / s + c3 * x * x * x / (s * s); });

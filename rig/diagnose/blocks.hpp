@@ -19,6 +19,15 @@ Eigen::VectorXd backlash(const Eigen::VectorXd& u, double half_width);
 Eigen::VectorXd saturate(const Eigen::VectorXd& u, double lower, double upper);
 // Rate limit r: v_k = v_{k-1} + clamp(u_k - v_{k-1}, -r dt, r dt), v_0 = u_0.
 Eigen::VectorXd rate_limit(const Eigen::VectorXd& u, double rate_per_s, double dt_s);
+// The same limits inside an integrating loop (a governor's integrator with anti-windup, whose
+// droop or speed loop restores the lost position with the time constant T = recovery_s):
+//   v_k = v_{k-1} + clamp(u_k - u_{k-1} + (u_{k-1} - v_{k-1}) dt/T, -r dt, r dt)   (rate)
+//   v_k = min(max(v_{k-1} + u_k - u_{k-1} + (u_{k-1} - v_{k-1}) dt/T, lower), upper)
+// T = dt gives the plain limiters above: the position is restored at once.
+Eigen::VectorXd rate_limit_in_loop(const Eigen::VectorXd& u, double rate_per_s, double recovery_s,
+                                   double dt_s);
+Eigen::VectorXd saturate_in_loop(const Eigen::VectorXd& u, double lower, double upper,
+                                 double recovery_s, double dt_s);
 // Static polynomial about the operating point, coefficients relative to sigma = std(u):
 //   v = u + c2 u^2 / sigma + c3 u^3 / sigma^2.
 Eigen::VectorXd polynomial(const Eigen::VectorXd& u, double c2_rel, double c3_rel, double sigma);

@@ -82,16 +82,47 @@ void rank(std::vector<HypothesisFit>& hs) {
   });
 }
 
+// The score of the same hypothesis without its input-side effects (0 when it has no
+// disturbance): what a pair's input-side half must add to.
+double disturbance_part_score(const std::vector<HypothesisFit>& hs, const HypothesisFit& h) {
+  double best = 0.0;
+  for (const auto& e : h.effects) {
+    if (kind_of(e.effect) != EffectKind::kDisturbance) continue;
+    for (const auto& g : hs)
+      if (g.effects.size() == 1 && g.effects[0].effect == e.effect) best = std::max(best, g.score);
+  }
+  return best;
+}
+
+// A drift alone is material when its rms is at least this fraction of the input-driven
+// response's, or when modelling it raises the validation fit by kDriftMaterialGainPct: a
+// slow wander of a few kW on a set excited by +-3 % is the operating noise of a running set
+// (every plant recording has some), not a missing effect.
+constexpr double kDriftMaterialFraction = 0.10;
+constexpr double kDriftMaterialGainPct = 3.0;
+
+bool immaterial_drift(const HypothesisFit& h, const Problem& pr) {
+  if (h.effects.size() != 1 || h.effects[0].effect != Effect::kDrift) return false;
+  if (h.validation_fit_after - h.validation_fit_before >= kDriftMaterialGainPct) return false;
+  for (const auto& [name, value] : h.derived)
+    if (name == "drift_rms") return value < kDriftMaterialFraction * pr.scales.z_std;
+  return false;
+}
+
 // The best hypothesis above min_gain; when the input tests failed, one with an input-side
-// effect, unless none of those reaches min_gain (then a disturbance alone explains it).
+// effect that adds min_gain to what its disturbance alone explains, unless there is none
+// (then a disturbance alone explains it).
 int choose(const DiagnoseResult& r, double min_gain) {
   const bool input = r.location.input_mismatch;
   int best_any = -1;
   for (std::size_t i = 0; i < r.hypotheses.size(); ++i) {
     const auto& h = r.hypotheses[i];
     if (h.score < min_gain) break;
+    if (immaterial_drift(h, r.problem)) continue;
     if (best_any < 0) best_any = static_cast<int>(i);
-    if (!input || has_input_side(h)) return static_cast<int>(i);
+    if (!input) return static_cast<int>(i);
+    if (has_input_side(h) && h.score - disturbance_part_score(r.hypotheses, h) >= min_gain)
+      return static_cast<int>(i);
   }
   return best_any;
 }
@@ -137,7 +168,8 @@ DiagnoseResult diagnose(const DiagnoseInput& in, const DiagnoseOptions& o) {
     }
   }
   r.chosen_index = choose(r, o.min_gain_pct);
-  if (!r.location.input_mismatch && !r.location.disturbance) {
+  // A disturbance alone that no hypothesis makes worth its parameters is not material.
+  if (!r.location.input_mismatch && (!r.location.disturbance || !r.chosen())) {
     r.verdict = "none";
   } else {
     r.verdict = r.chosen() ? verdict_of(*r.chosen()) : "unexplained";

@@ -72,6 +72,7 @@ EffectKind kind_of(Effect effect) {
 std::vector<ParamSpec> parameter_specs(Effect effect, const DataScales& s) {
   const double lag_lo = s.dt_s / 5.0, lag_hi = std::max(10.0 * s.dt_s, s.duration_s / 20.0);
   const double su = std::max(s.u_std, 1e-12);
+  const double recovery_hi = std::max(10.0 * s.dt_s, std::min(60.0, s.duration_s / 10.0));
   switch (effect) {
     case Effect::kDeadTime:
       return {{"extra_delay_s", -s.delay_s, std::min(2.0, 0.05 * s.duration_s), false}};
@@ -87,12 +88,15 @@ std::vector<ParamSpec> parameter_specs(Effect effect, const DataScales& s) {
     case Effect::kDeadband:
     case Effect::kBacklash:
       return {{"half_width", 1e-4 * su, 3.0 * su, true}};
+    // recovery_s: dt = a plain limit; longer = inside an integrating loop (blocks.hpp).
     case Effect::kSaturation:
       return {{"upper_limit", 0.05 * su, 6.0 * su, true},
-              {"lower_limit_magnitude", 0.05 * su, 6.0 * su, true}};
+              {"lower_limit_magnitude", 0.05 * su, 6.0 * su, true},
+              {"recovery_s", s.dt_s, recovery_hi, true}};
     case Effect::kRateLimit:
       return {{"rate_limit_per_s", 0.02 * std::max(s.u_rate_std, 1e-12),
-               10.0 * std::max(s.u_rate_std, 1e-12), true}};
+               10.0 * std::max(s.u_rate_std, 1e-12), true},
+              {"recovery_s", s.dt_s, recovery_hi, true}};
     case Effect::kStaticNonlinearity:
       return {{"quadratic_rel", -0.6, 0.6, false}, {"cubic_rel", -0.3, 0.3, false}};
     case Effect::kNonlinearStiffness:

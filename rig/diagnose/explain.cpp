@@ -57,6 +57,15 @@ double derived(const HypothesisFit& h, const std::string& key) {
   return std::nan("");
 }
 
+// A limit inside an integrating loop loses position that the loop restores slowly.
+std::string in_loop_words(const std::vector<double>& p, std::size_t i, double dt_s) {
+  if (p.size() <= i || p[i] < 5.0 * dt_s) return "";
+  return fmt::format(
+      ", inside an integrating loop (a governor integrator with anti-windup) that restores the "
+      "lost position with a time constant of {:.3g} s",
+      p[i]);
+}
+
 std::string what_effect_means(const AppliedEffect& e, const HypothesisFit& h, const Problem& pr) {
   const auto& p = e.params;
   const double su = pr.scales.u_std;
@@ -98,10 +107,11 @@ std::string what_effect_means(const AppliedEffect& e, const HypothesisFit& h, co
     case Effect::kSaturation:
       return fmt::format(
           "the input is limited at +{:.3g} / -{:.3g} about the operating point "
-          "({:.1f} / {:.1f} standard deviations)",
-          p[0], p[1], p[0] / su, p[1] / su);
+          "({:.1f} / {:.1f} standard deviations){}",
+          p[0], p[1], p[0] / su, p[1] / su, in_loop_words(p, 2, pr.dt_s));
     case Effect::kRateLimit:
-      return fmt::format("the input cannot change faster than {:.3g} per second", p[0]);
+      return fmt::format("the input cannot change faster than {:.3g} per second{}", p[0],
+                         in_loop_words(p, 1, pr.dt_s));
     case Effect::kStaticNonlinearity:
       return fmt::format(
           "the static gain changes with level: at +1 standard deviation it is {:.2f}, at -1 "
@@ -136,18 +146,39 @@ std::string what_effect_means(const AppliedEffect& e, const HypothesisFit& h, co
   return "";
 }
 
+// A disturbance the location found that no hypothesis makes worth its parameters.
+std::string negligible_disturbance(const DiagnoseResult& r) {
+  if (!r.location.disturbance || r.hypotheses.empty()) return "";
+  const HypothesisFit& h = r.hypotheses.front();
+  if (h.name() == "drift")
+    return fmt::format(
+        " A slow drift of rms {:.3g} ({:.0f} % of the input-driven response) was detected in the "
+        "residual: below a tenth of the response it is the operating noise of a running set, "
+        "not a missing effect (modelling it: validation fit {:.1f} % -> {:.1f} %).",
+        derived(h, "drift_rms"), 100.0 * derived(h, "drift_rms") / r.problem.scales.z_std,
+        h.validation_fit_before, h.validation_fit_after);
+  return fmt::format(
+      " A periodic component was detected in the residual, but modelling it changes the "
+      "validation fit only from {:.1f} % to {:.1f} %: not material.",
+      h.validation_fit_before, h.validation_fit_after);
+}
+
 }  // namespace
 
 std::string explain(const DiagnoseResult& r) {
   const auto& t = r.location.tests;
   if (r.verdict == "none")
     return fmt::format(
-        "The model explains the recording within noise: fit {:.1f} % (validation {:.1f} %); the "
-        "residual is independent of the input (largest cross-correlation {:.2f} of the 99 % bound, "
-        "threshold {:.2f}), no frequency band disagrees beyond the H1 uncertainty and the gain "
-        "does "
-        "not depend on amplitude.",
-        r.fit_before_pct, r.validation_fit_before_pct, t.cross_ratio, t.cross_threshold);
+               "The model explains the recording within noise: fit {:.1f} % (validation {:.1f} %); "
+               "the "
+               "residual is independent of the input (largest cross-correlation {:.2f} of the 99 % "
+               "bound, "
+               "threshold {:.2f}), no frequency band disagrees beyond the H1 uncertainty and the "
+               "gain "
+               "does "
+               "not depend on amplitude.",
+               r.fit_before_pct, r.validation_fit_before_pct, t.cross_ratio, t.cross_threshold) +
+           negligible_disturbance(r);
   std::string s = where_in_frequency(r.location) + where_in_time_and_level(r);
   if (!t.independent)
     s += fmt::format(

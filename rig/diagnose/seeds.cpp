@@ -31,9 +31,11 @@ std::vector<std::vector<double>> seeds_for(Effect e, const Problem& pr, const Lo
     case Effect::kBacklash:
       return {{0.1 * su}, {0.4 * su}};
     case Effect::kSaturation:
-      return {{1.5 * su, 1.5 * su}, {2.5 * su, 2.5 * su}};
+      return {
+          {1.5 * su, 1.5 * su, s.dt_s}, {2.5 * su, 2.5 * su, s.dt_s}, {1.5 * su, 2.0 * su, 3.0}};
     case Effect::kRateLimit:
-      return {{0.5 * s.u_rate_std}, {1.5 * s.u_rate_std}};
+      return {
+          {0.5 * s.u_rate_std, s.dt_s}, {1.5 * s.u_rate_std, s.dt_s}, {1.5 * s.u_rate_std, 3.0}};
     case Effect::kStaticNonlinearity:
       return {{0.0, 0.0}, {0.1, -0.05}};
     case Effect::kNonlinearStiffness:
