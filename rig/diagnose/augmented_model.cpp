@@ -160,6 +160,8 @@ void finish_problem(Problem& pr) {
   s.u_std = std_of(pr.u);
   s.u_rate_std = n > 1 ? std_of((pr.u.tail(n - 1) - pr.u.head(n - 1)) / pr.dt_s) : 1.0;
   s.z_std = std_of(pr.baseline_z);
+  if (s.z_std > 0.0)
+    s.z_peak_ratio = (pr.baseline_z.array() - pr.baseline_z.mean()).abs().maxCoeff() / s.z_std;
   s.z_rate_std =
       n > 1 ? std_of((pr.baseline_z.tail(n - 1) - pr.baseline_z.head(n - 1)) / pr.dt_s) : 1.0;
   s.delay_s = pr.tf.delay_s;
@@ -207,8 +209,13 @@ ModelOutput model_output(const Problem& pr, std::span<const AppliedEffect> effec
     if (e.effect == Effect::kDrift) drift = &e;
   }
   const Eigen::Index n = z.size();
-  Eigen::MatrixXd x(n, periodic ? 3 : 1);
+  const bool shift = pr.level_shift_at > 0 && pr.level_shift_at < n;
+  Eigen::MatrixXd x(n, (periodic ? 3 : 1) + (shift ? 1 : 0));
   x.col(0).setOnes();
+  if (shift) {
+    x.col(x.cols() - 1).head(pr.level_shift_at).setZero();
+    x.col(x.cols() - 1).tail(n - pr.level_shift_at).setOnes();
+  }
   if (periodic) {
     const Eigen::ArrayXd t =
         Eigen::ArrayXd::LinSpaced(n, 0.0, static_cast<double>(n - 1)) * pr.dt_s;
@@ -219,6 +226,7 @@ ModelOutput model_output(const Problem& pr, std::span<const AppliedEffect> effec
   const Eigen::VectorXd beta =
       (sw.asDiagonal() * x).colPivHouseholderQr().solve(sw.asDiagonal() * (pr.y - z));
   out.yhat = z + x * beta;
+  if (shift) out.derived.emplace_back("level_shift", beta(x.cols() - 1));
   if (periodic) {
     out.derived.emplace_back("amplitude", std::hypot(beta(1), beta(2)));
     out.derived.emplace_back("phase_deg", std::atan2(-beta(2), beta(1)) * 180.0 / std::numbers::pi);

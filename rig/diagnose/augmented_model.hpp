@@ -27,6 +27,9 @@ struct Problem {
   Eigen::Index active_to = -1;  // -1: to the end
   DataScales scales;
   Eigen::VectorXd baseline_z;  // simulate(tf, u) before output coupling
+  // An abrupt step of the recorded level (an operating-point change) at this sample, fitted
+  // as a second offset by every model, the baseline included; -1: none.
+  Eigen::Index level_shift_at = -1;
 };
 
 struct ModelOutput {

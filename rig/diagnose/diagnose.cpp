@@ -146,7 +146,14 @@ DiagnoseResult diagnose(const DiagnoseInput& in, const DiagnoseOptions& o) {
   DiagnoseResult r;
   r.problem = prepare_problem(in, &r.blocks, &r.warmup);
   Problem& pr = r.problem;
+  // An operating-point step is fitted as a second offset by every model, the baseline too.
+  pr.level_shift_at = find_level_shift(pr, pr.y - model_output(pr, {}).yhat);
   const ModelOutput base = model_output(pr, {});
+  for (const auto& [name, value] : base.derived)
+    if (name == "level_shift") {
+      r.level_shift_time_s = static_cast<double>(pr.level_shift_at) * pr.dt_s;
+      r.level_shift = value;
+    }
   r.baseline_yhat = base.yhat;
   Eigen::ArrayXd used = pr.est_weight + pr.val_weight;
   r.fit_before_pct = weighted_fit_pct(pr.y, base.yhat, used);

@@ -44,7 +44,9 @@ struct DiagnoseResult {
   std::string explanation;
   Problem problem;  // the data as diagnosed (means removed, split)
   Eigen::VectorXd baseline_yhat;
-  double fit_before_pct = 0.0;  // whole record after the warm-up
+  std::optional<double> level_shift_time_s;  // an operating-point step (split.hpp), if any
+  double level_shift = 0.0;                  // its size, output units
+  double fit_before_pct = 0.0;               // whole record after the warm-up
   double validation_fit_before_pct = 0.0;
   int blocks = 0;
   Eigen::Index warmup = 0;

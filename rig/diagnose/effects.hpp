@@ -75,12 +75,13 @@ struct ParamSpec {
 struct DataScales {
   double dt_s = 0.01;
   double duration_s = 100.0;
-  double u_std = 1.0;       // input standard deviation
-  double u_rate_std = 1.0;  // standard deviation of du/dt
-  double z_std = 1.0;       // baseline model output standard deviation
-  double z_rate_std = 1.0;  // standard deviation of its rate dz/dt
-  double dc_gain = 1.0;     // the baseline's static gain (its peak gain when not finite)
-  double delay_s = 0.0;     // the baseline's dead time
+  double u_std = 1.0;         // input standard deviation
+  double u_rate_std = 1.0;    // standard deviation of du/dt
+  double z_std = 1.0;         // baseline model output standard deviation
+  double z_rate_std = 1.0;    // standard deviation of its rate dz/dt
+  double z_peak_ratio = 3.0;  // max |z - mean| over its standard deviation (crest factor)
+  double dc_gain = 1.0;       // the baseline's static gain (its peak gain when not finite)
+  double delay_s = 0.0;       // the baseline's dead time
 };
 
 std::vector<ParamSpec> parameter_specs(Effect effect, const DataScales& scales);

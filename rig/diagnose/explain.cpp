@@ -146,6 +146,15 @@ std::string what_effect_means(const AppliedEffect& e, const HypothesisFit& h, co
   return "";
 }
 
+// An operating-point step found in the recording (find_level_shift).
+std::string level_shift_words(const DiagnoseResult& r) {
+  if (!r.level_shift_time_s) return "";
+  return fmt::format(
+      "The recorded level steps by {:+.4g} at {:.1f} s (an operating-point change, or a gain "
+      "that changed with the operating point in it); every model is given that step. ",
+      r.level_shift, *r.level_shift_time_s);
+}
+
 // A disturbance the location found that no hypothesis makes worth its parameters.
 std::string negligible_disturbance(const DiagnoseResult& r) {
   if (!r.location.disturbance || r.hypotheses.empty()) return "";
@@ -168,7 +177,8 @@ std::string negligible_disturbance(const DiagnoseResult& r) {
 std::string explain(const DiagnoseResult& r) {
   const auto& t = r.location.tests;
   if (r.verdict == "none")
-    return fmt::format(
+    return level_shift_words(r) +
+           fmt::format(
                "The model explains the recording within noise: fit {:.1f} % (validation {:.1f} %); "
                "the "
                "residual is independent of the input (largest cross-correlation {:.2f} of the 99 % "
@@ -179,7 +189,8 @@ std::string explain(const DiagnoseResult& r) {
                "not depend on amplitude.",
                r.fit_before_pct, r.validation_fit_before_pct, t.cross_ratio, t.cross_threshold) +
            negligible_disturbance(r);
-  std::string s = where_in_frequency(r.location) + where_in_time_and_level(r);
+  std::string s =
+      level_shift_words(r) + where_in_frequency(r.location) + where_in_time_and_level(r);
   if (!t.independent)
     s += fmt::format(
         "The residual is correlated with the input (peak {:.1f} times the 99 % bound at a lag "

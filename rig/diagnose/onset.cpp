@@ -49,6 +49,33 @@ ChangePoint change_point(const Problem& pr, const Eigen::VectorXd& base,
 
 }  // namespace
 
+Eigen::Index find_level_shift(const Problem& pr, const Eigen::VectorXd& r) {
+  const Eigen::Index n = r.size();
+  const Eigen::Index w = std::max<Eigen::Index>(100, std::llround(2.0 / pr.dt_s));
+  if (n < 8 * w) return -1;
+  Eigen::VectorXd c(n + 1);  // prefix sums: mean(r[a, b)) = (c_b - c_a) / (b - a)
+  c(0) = 0.0;
+  for (Eigen::Index k = 0; k < n; ++k) c(k + 1) = c(k) + r(k);
+  const Eigen::Index m = n - 2 * w + 1;
+  Eigen::VectorXd d(m);
+  for (Eigen::Index i = 0; i < m; ++i) {
+    const Eigen::Index k = i + w;
+    d(i) = (c(k + w) - c(k)) / static_cast<double>(w) - (c(k) - c(k - w)) / static_cast<double>(w);
+  }
+  std::vector<double> v(d.data(), d.data() + m);
+  const auto median = [](std::vector<double> x) {
+    std::nth_element(x.begin(), x.begin() + static_cast<std::ptrdiff_t>(x.size() / 2), x.end());
+    return x[x.size() / 2];
+  };
+  const double med = median(v);
+  for (double& x : v) x = std::abs(x - med);
+  const double spread = 1.4826 * median(v);
+  Eigen::Index best = 0;
+  const double peak = (d.array() - med).abs().maxCoeff(&best);
+  if (spread <= 0.0 || peak < 10.0 * spread || peak < 0.5 * pr.scales.z_std) return -1;
+  return best + w;
+}
+
 void refine_onsets(const Problem& pr, std::vector<HypothesisFit>& hs, const Eigen::VectorXd& base,
                    const FitOptions& fit) {
   if (pr.active_from > 0 || pr.active_to < pr.y.size()) return;  // already located in time

@@ -62,6 +62,9 @@ json location_json(const DiagnoseResult& r) {
                                : json(nullptr);
   return {{"band_hz", band},
           {"time_windows", windows},
+          {"level_shift", r.level_shift_time_s ? nlohmann::json{{"time_s", *r.level_shift_time_s},
+                                                                {"size", r.level_shift}}
+                                               : nlohmann::json(nullptr)},
           {"amplitude_dependent",
            loc.amp.amplitude_dependent || loc.amp.sign_dependent || loc.amp.direction_dependent},
           {"amplitude",

@@ -38,8 +38,14 @@ std::vector<std::vector<double>> seeds_for(Effect e, const Problem& pr, const Lo
           {0.5 * s.u_rate_std, s.dt_s}, {1.5 * s.u_rate_std, s.dt_s}, {1.5 * s.u_rate_std, 3.0}};
     case Effect::kStaticNonlinearity:
       return {{0.0, 0.0}, {0.1, -0.05}};
-    case Effect::kNonlinearStiffness:
-      return {{0.1}, {-0.1}};
+    case Effect::kNonlinearStiffness: {
+      // The cubic term at the peak is (peak/sd)^2 times its value at 1 sd: an output with a
+      // high crest factor (an arrow, pulses) makes +-0.1 unstable at its peaks (Silverbox
+      // arrow, crest 5.6: +-0.03 already diverges); start at 0.1 (sd/peak)^2 there as well.
+      if (s.z_peak_ratio <= 4.0) return {{0.1}, {-0.1}};
+      const double c = 0.1 / (s.z_peak_ratio * s.z_peak_ratio);
+      return {{0.1}, {-0.1}, {c}, {-c}};
+    }
     case Effect::kCoulombFriction:
       return {{0.05 * su}, {0.2 * su}};
     case Effect::kLoadDamping: {

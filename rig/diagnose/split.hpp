@@ -25,6 +25,15 @@ void gate_to_windows(Problem& problem, const Location& location);
 void refine_onsets(const Problem& problem, std::vector<HypothesisFit>& hypotheses,
                    const Eigen::VectorXd& baseline_yhat, const FitOptions& fit);
 
+// An abrupt step of the recorded level (a transducer re-ranged, a gain that changed with the
+// operating point in it, a load step): the difference of the residual's means over the
+// windows W = max(2 s, 100 samples) after and before each candidate sample k,
+//   d_k = mean(r[k, k+W)) - mean(r[k-W, k)),
+// against its robust spread over the record (1.4826 x the median absolute deviation): a
+// step is where |d_k| exceeds 10 spreads and half the model output's std. Drift and noise
+// move d_k smoothly and everywhere; a step only near one k. Returns the sample, or -1.
+Eigen::Index find_level_shift(const Problem& problem, const Eigen::VectorXd& residual);
+
 // extra_lag and sensor_lag act alike on the input; a sensor lag also filters the noise.
 // The residual after the lag is fitted tells them apart: its PSD above 2 fc over its PSD
 // below fc/2 (fc = 1/(2 pi T)) is about 1 for noise that bypassed the lag and about
