@@ -96,7 +96,9 @@ void check_units(const io::Recording& rec, const io::ModelFile& m, const std::st
 }
 
 // The sidecar's coupling applies to the model when the output column went through the
-// coupler and the input column did not (a coupled pair keeps the linear relation).
+// coupler and the input column did not (a coupled pair keeps the linear relation). A
+// coupling that names no columns is the rig's matched coupling of raw columns (what
+// `rig commission` writes): the recorded u and y are raw, so nothing applies.
 std::optional<double> output_coupling(const io::Recording& rec, const std::string& in,
                                       const std::string& out) {
   const auto& sc = rec.sidecar;
@@ -105,16 +107,30 @@ std::optional<double> output_coupling(const io::Recording& rec, const std::strin
     return std::find(sc.coupled_columns.begin(), sc.coupled_columns.end(), c) !=
            sc.coupled_columns.end();
   };
-  if (sc.coupled_columns.empty()) return sc.coupling_rc_s;
+  if (sc.coupled_columns.empty()) return std::nullopt;
   return has(out) && !has(in) ? sc.coupling_rc_s : std::nullopt;
 }
 
-// A plant TOML: plantsim's linearisation, with half a sample of dead time for the bias the
-// recording holds over each sample (zero-order hold; the linearisation is continuous).
-io::ModelFile plant_baseline(const PlantModel& plant, double dt_s) {
-  io::ModelFile m = plant.linear;
-  m.tf.delay_s += 0.5 * dt_s;
-  return m;
+// A model of the plant's physics (a plant TOML, a JSON from `plantsim --linearise`, which
+// names its source plant, or the model `rig commission` writes, "timing": "plant") relates
+// u(t) and y(t) in continuous time; the rows hold each u for
+// a sample (zero-order hold: half a sample of dead time) and may carry y sampled after the
+// row's u was written (sidecar y_sampled_after_s: one sample in lockstep). Identified
+// models have both in their delay already and are used as they are.
+bool physical_model(const io::ModelFile& m, bool plant_toml) {
+  const auto& x = m.extra;
+  return plant_toml ||
+         (x.contains("source") && x["source"].is_object() && x["source"].contains("plant")) ||
+         (x.contains("timing") && x["timing"] == "plant");
+}
+
+double row_alignment_s(const io::Recording& rec) {
+  const auto& raw = rec.sidecar.raw;
+  const double after =
+      raw.is_object() && raw.contains("y_sampled_after_s") && raw["y_sampled_after_s"].is_number()
+          ? raw["y_sampled_after_s"].get<double>()
+          : 0.0;
+  return 0.5 * rec.dt_s - after;
 }
 
 int run_diagnose(const DiagnoseArgs& a) {
@@ -127,7 +143,14 @@ int run_diagnose(const DiagnoseArgs& a) {
     tmp.emplace();
     plant = load_plant_model(a.model, session::default_plantsim_path(), *tmp);
   }
-  const io::ModelFile model = plant ? plant_baseline(*plant, rec.dt_s) : io::read_model(a.model);
+  io::ModelFile model = plant ? plant->linear : io::read_model(a.model);
+  const double alignment_s = physical_model(model, plant_toml) ? row_alignment_s(rec) : 0.0;
+  model.tf.delay_s += alignment_s;
+  if (model.tf.delay_s < 0.0)
+    bad(a.model.string(), "delay_s",
+        fmt::format("the model's dead time is shorter than the recording's row alignment "
+                    "({:.4g} s)",
+                    -alignment_s));
   check_units(rec, model, a.model.string(), in, out);
   if (!model.tf.is_stable())
     bad(a.model.string(), "den",
@@ -149,6 +172,7 @@ int run_diagnose(const DiagnoseArgs& a) {
   std::filesystem::create_directories(a.out);
   const diagnose::ReportContext ctx{a.recording.string(), a.model.string(), in, out};
   nlohmann::json doc = diagnose::report_json(r, ctx);
+  doc["model_alignment_s"] = alignment_s;
   std::vector<std::string> plant_lines;
   if (plant) {
     const PlantOutputInput pi{*plant,

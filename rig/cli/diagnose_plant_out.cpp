@@ -100,7 +100,7 @@ json write_plant_outputs(const PlantOutputInput& in, std::vector<std::string>* s
   out["plant_model"] = {{"file", in.plant.toml.string()},
                         {"plantsim", in.plant.plantsim.string()},
                         {"linearised", io::model_to_json(in.plant.linear)},
-                        {"zoh_delay_s", 0.5 * in.dt_s},
+                        {"alignment_s", in.baseline.delay_s - in.plant.linear.tf.delay_s},
                         {"augmented_plant", "augmented_plant.toml"},
                         {"changes", changes_json(mapping)},
                         {"notes", mapping.notes}};

@@ -30,6 +30,7 @@ struct Problem {
   // An abrupt step of the recorded level (an operating-point change) at this sample, fitted
   // as a second offset by every model, the baseline included; -1: none.
   Eigen::Index level_shift_at = -1;
+  double y_level = 0.0;  // the recorded output's mean (the operating level, when it has one)
 };
 
 struct ModelOutput {

@@ -98,21 +98,30 @@ double disturbance_part_score(const std::vector<HypothesisFit>& hs, const Hypoth
 // response's, or when modelling it raises the validation fit by kDriftMaterialGainPct: a
 // slow wander of a few kW on a set excited by +-3 % is the operating noise of a running set
 // (every plant recording has some), not a missing effect.
+// When the output carries its operating level (|mean| > 10 std, e.g. a power reading), a
+// drift must also exceed kDriftMaterialOfLevel of that level: wander within a power
+// transducer's accuracy (class 0.2-0.5 %) is no missing effect however small the
+// excitation (a commissioning test's is small on purpose).
 constexpr double kDriftMaterialFraction = 0.10;
 constexpr double kDriftMaterialGainPct = 3.0;
+constexpr double kDriftMaterialOfLevel = 0.002;
 
 bool immaterial_drift(const HypothesisFit& h, const Problem& pr) {
   if (h.effects.size() != 1 || h.effects[0].effect != Effect::kDrift) return false;
-  if (h.validation_fit_after - h.validation_fit_before >= kDriftMaterialGainPct) return false;
+  double rms = 0.0;
   for (const auto& [name, value] : h.derived)
-    if (name == "drift_rms") return value < kDriftMaterialFraction * pr.scales.z_std;
-  return false;
+    if (name == "drift_rms") rms = value;
+  const double y_std = std::sqrt(pr.y.squaredNorm() / std::max<double>(1.0, pr.y.size()));
+  const double level = std::abs(pr.y_level);
+  if (level > 10.0 * y_std && rms < kDriftMaterialOfLevel * level) return true;
+  if (h.validation_fit_after - h.validation_fit_before >= kDriftMaterialGainPct) return false;
+  return rms < kDriftMaterialFraction * pr.scales.z_std;
 }
 
 // The best hypothesis above min_gain; when the input tests failed, one with an input-side
 // effect that adds min_gain to what its disturbance alone explains, unless there is none
 // (then a disturbance alone explains it).
-int choose(const DiagnoseResult& r, double min_gain) {
+int choose_raw(const DiagnoseResult& r, double min_gain) {
   const bool input = r.location.input_mismatch;
   int best_any = -1;
   for (std::size_t i = 0; i < r.hypotheses.size(); ++i) {
@@ -125,6 +134,26 @@ int choose(const DiagnoseResult& r, double min_gain) {
       return static_cast<int>(i);
   }
   return best_any;
+}
+
+// A pair "effect + drift" whose drift alone is immaterial is reported as the effect alone
+// when that single scores min_gain too: the augmented model should not carry the set's
+// normal wander as a change.
+int choose(const DiagnoseResult& r, double min_gain) {
+  const int i = choose_raw(r, min_gain);
+  if (i < 0) return i;
+  const auto& h = r.hypotheses[static_cast<std::size_t>(i)];
+  if (h.effects.size() != 2 || h.effects[1].effect != Effect::kDrift) return i;
+  bool drift_immaterial = false;
+  int single = -1;
+  for (std::size_t j = 0; j < r.hypotheses.size(); ++j) {
+    const auto& g = r.hypotheses[j];
+    if (g.effects.size() != 1) continue;
+    if (g.effects[0].effect == Effect::kDrift) drift_immaterial = immaterial_drift(g, r.problem);
+    if (g.effects[0].effect == h.effects[0].effect && g.score >= min_gain)
+      single = static_cast<int>(j);
+  }
+  return drift_immaterial && single >= 0 ? single : i;
 }
 
 // The verdict word of a chosen hypothesis: its input-side effect (the first listed, pairs

@@ -161,10 +161,12 @@ std::string negligible_disturbance(const DiagnoseResult& r) {
   const HypothesisFit& h = r.hypotheses.front();
   if (h.name() == "drift")
     return fmt::format(
-        " A slow drift of rms {:.3g} ({:.0f} % of the input-driven response) was detected in the "
-        "residual: below a tenth of the response it is the operating noise of a running set, "
-        "not a missing effect (modelling it: validation fit {:.1f} % -> {:.1f} %).",
+        " A slow drift of rms {:.3g} ({:.0f} % of the input-driven response, {:.2f} % of the "
+        "output's mean level) was detected in the residual: the operating noise of a running "
+        "set, not a missing effect (modelling it: validation fit {:.1f} % -> {:.1f} %).",
         derived(h, "drift_rms"), 100.0 * derived(h, "drift_rms") / r.problem.scales.z_std,
+        r.problem.y_level != 0.0 ? 100.0 * derived(h, "drift_rms") / std::abs(r.problem.y_level)
+                                 : 0.0,
         h.validation_fit_before, h.validation_fit_after);
   return fmt::format(
       " A periodic component was detected in the residual, but modelling it changes the "

@@ -53,6 +53,7 @@ Problem prepare_problem(const DiagnoseInput& in, int* blocks, Eigen::Index* warm
   pr.output_rc_s = in.output_rc_s;
   pr.u = in.u.array() - in.u.mean();
   pr.y = in.y.array() - in.y.mean();
+  pr.y_level = in.y.mean();
   const Eigen::Index n = in.u.size(), w = warmup_samples(in);
   const int nb = n - w >= 8 * 128 ? 8 : 4;
   const Eigen::Index len = (n - w) / nb;

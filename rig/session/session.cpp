@@ -17,9 +17,12 @@ io::Sidecar recording_sidecar(const SessionData& d) {
   io::Sidecar s;
   s.present = true;
   s.sample_rate_hz = d.config.link.sample_rate_hz;
-  s.units = {{"t", "s"},          {"u", "%"},        {"y", "kW"},        {"speed_rpm", "rpm"},
-             {"freq_hz", "Hz"},   {"status", "bits"}, {"phase", "code"}, {"request", "%"},
-             {"bias_echo", "%"},  {"plant_time_s", "s"}, {"counter", "ticks"}};
+  s.units = {{"t", "s"},          {"u", "%"},
+             {"y", "kW"},         {"speed_rpm", "rpm"},
+             {"freq_hz", "Hz"},   {"status", "bits"},
+             {"phase", "code"},   {"request", "%"},
+             {"bias_echo", "%"},  {"plant_time_s", "s"},
+             {"counter", "ticks"}};
   if (d.config.excitation.ac_coupling_rc_s > 0.0) {
     // The recorded u and y are raw; the rig applies this matched coupling to both.
     s.coupling_rc_s = d.config.excitation.ac_coupling_rc_s;
@@ -29,6 +32,12 @@ io::Sidecar recording_sidecar(const SessionData& d) {
   s.seed = d.plant_seed;
   s.raw["phase_codes"] = {{"0", "steady"}, {"1", "pilot"}, {"2", "excite"}, {"3", "sweep"}};
   s.raw["rated_power_kw"] = d.config.plant.rated_power_kw;
+  // When each row's y was sampled, after the row's u was written: in lockstep the rig writes
+  // u and the plant answers after advancing one sample period with it; in real time the rig
+  // reads the latest sample, taken before the write took effect. A model of the plant's
+  // physics is aligned with the rows by this (rig diagnose; docs/decisions.md).
+  s.raw["y_sampled_after_s"] =
+      d.config.link.lockstep_ticks > 0 ? 1.0 / d.config.link.sample_rate_hz : 0.0;
   return s;
 }
 
@@ -77,7 +86,8 @@ SessionData run_commission(const TestConfig& config, const SessionOptions& optio
     return data;
   }
   io::RecordingWriterOptions wo;
-  wo.flush_period = std::chrono::milliseconds(static_cast<long>(config.output.flush_interval_s * 1000));
+  wo.flush_period =
+      std::chrono::milliseconds(static_cast<long>(config.output.flush_interval_s * 1000));
   wo.sync_to_disk = false;  // flushed to the kernel: survives a kill -9 of the rig
   io::RecordingWriter recorder(options.out_dir / "recording.csv", recording_columns(),
                                recording_sidecar(data), wo);
@@ -97,9 +107,9 @@ SessionData run_commission(const TestConfig& config, const SessionOptions& optio
   data.wall_time_s =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
   if (data.outcome.empty()) {
-    data.outcome = data.command == "sweep"   ? std::string("swept sine complete")
-                   : data.compare_sweep     ? data.compare_sweep->summary
-                                            : std::string("test complete (no swept-sine check)");
+    data.outcome = data.command == "sweep" ? std::string("swept sine complete")
+                   : data.compare_sweep    ? data.compare_sweep->summary
+                                           : std::string("test complete (no swept-sine check)");
   }
   write_outputs(data, options.out_dir);
   return data;

@@ -15,7 +15,8 @@ using report::number_or_null;
 json parameters_json(const std::vector<ident::ParameterEstimate>& params) {
   json a = json::array();
   for (const auto& p : params) {
-    a.push_back({{"name", p.name}, {"value", number_or_null(p.value)},
+    a.push_back({{"name", p.name},
+                 {"value", number_or_null(p.value)},
                  {"std_error", number_or_null(p.std_error)}});
   }
   return a;
@@ -23,18 +24,23 @@ json parameters_json(const std::vector<ident::ParameterEstimate>& params) {
 
 json derived_json(const ident::DerivedFigures& d) {
   if (!d.valid) return nullptr;
-  return {{"gain_kw_per_pct", number_or_null(d.gain)}, {"gain_std", number_or_null(d.gain_std)},
-          {"fn_hz", number_or_null(d.fn_hz)},          {"fn_hz_std", number_or_null(d.fn_hz_std)},
-          {"zeta", number_or_null(d.zeta)},            {"zeta_std", number_or_null(d.zeta_std)}};
+  return {{"gain_kw_per_pct", number_or_null(d.gain)},
+          {"gain_std", number_or_null(d.gain_std)},
+          {"fn_hz", number_or_null(d.fn_hz)},
+          {"fn_hz_std", number_or_null(d.fn_hz_std)},
+          {"zeta", number_or_null(d.zeta)},
+          {"zeta_std", number_or_null(d.zeta_std)}};
 }
 
 json compare_json(const std::optional<fra::CompareResult>& c) {
   if (!c) return nullptr;
   json rows = json::array();
   for (const auto& r : c->rows) {
-    rows.push_back({{"freq_hz", r.freq_hz}, {"mag_error_db", number_or_null(r.mag_error_db)},
+    rows.push_back({{"freq_hz", r.freq_hz},
+                    {"mag_error_db", number_or_null(r.mag_error_db)},
                     {"phase_error_deg", number_or_null(r.phase_error_deg)},
-                    {"checked", r.checked}, {"pass", r.pass}});
+                    {"checked", r.checked},
+                    {"pass", r.pass}});
   }
   return {{"verdict", fra::to_string(c->verdict)},
           {"checked", c->checked},
@@ -48,9 +54,11 @@ json compare_json(const std::optional<fra::CompareResult>& c) {
 json frf_json(const std::vector<fra::FrfPoint>& frf) {
   json a = json::array();
   for (const auto& p : frf) {
-    a.push_back({{"freq_hz", p.freq_hz}, {"mag", number_or_null(p.mag)},
+    a.push_back({{"freq_hz", p.freq_hz},
+                 {"mag", number_or_null(p.mag)},
                  {"phase_deg", number_or_null(p.phase_deg)},
-                 {"coherence", number_or_null(p.coherence)}, {"valid", p.valid}});
+                 {"coherence", number_or_null(p.coherence)},
+                 {"valid", p.valid}});
   }
   return a;
 }
@@ -58,7 +66,10 @@ json frf_json(const std::vector<fra::FrfPoint>& frf) {
 json history_json(const std::vector<BlockEstimate>& history) {
   json a = json::array();
   for (const auto& e : history) {
-    a.push_back({{"block", e.block}, {"t_s", e.t_s}, {"ok", e.ok}, {"error", e.error},
+    a.push_back({{"block", e.block},
+                 {"t_s", e.t_s},
+                 {"ok", e.ok},
+                 {"error", e.error},
                  {"parameters", parameters_json(e.parameters)},
                  {"derived", derived_json(e.derived)},
                  {"delay_s", number_or_null(e.delay_s)},
@@ -87,11 +98,16 @@ json config_json(const TestConfig& c) {
           {"correlator", c.mmfm.correlator},
           {"averaging", c.mmfm.averaging},
           {"target_rel_std_error", c.mmfm.target_rel_std_error},
-          {"sweep", {{"from_hz", c.sweep.from_hz}, {"to_hz", c.sweep.to_hz},
-                     {"points", c.sweep.points}, {"enabled", c.sweep.enabled}}},
-          {"compare", {{"from_hz", c.compare.from_hz}, {"to_hz", c.compare.to_hz},
-                       {"mag_tol_db", c.compare.mag_tol_db},
-                       {"phase_tol_deg", c.compare.phase_tol_deg}}}};
+          {"sweep",
+           {{"from_hz", c.sweep.from_hz},
+            {"to_hz", c.sweep.to_hz},
+            {"points", c.sweep.points},
+            {"enabled", c.sweep.enabled}}},
+          {"compare",
+           {{"from_hz", c.compare.from_hz},
+            {"to_hz", c.compare.to_hz},
+            {"mag_tol_db", c.compare.mag_tol_db},
+            {"phase_tol_deg", c.compare.phase_tol_deg}}}};
 }
 
 // Realtime: lateness of each cycle's start against its schedule and overruns; lockstep: the
@@ -105,9 +121,10 @@ json loop_timing_json(const std::optional<LoopTimingSummary>& t) {
             {"exchange_p99_ms", t->exchange_p99_ms},
             {"exchange_max_ms", t->exchange_max_ms},
             {"exchange_mean_ms", t->exchange_mean_ms},
-            {"histogram", {{"of", t->mode == "realtime" ? "jitter" : "exchange"},
-                           {"bin_ms", t->histogram.bin_ms},
-                           {"counts", t->histogram.counts}}}};
+            {"histogram",
+             {{"of", t->mode == "realtime" ? "jitter" : "exchange"},
+              {"bin_ms", t->histogram.bin_ms},
+              {"counts", t->histogram.counts}}}};
   if (t->mode == "realtime") {
     j["jitter_p50_ms"] = t->jitter_p50_ms;
     j["jitter_p99_ms"] = t->jitter_p99_ms;
@@ -133,18 +150,24 @@ json report_json(const SessionData& d) {
   j["plant_seed"] = d.plant_seed ? json(*d.plant_seed) : json(nullptr);
   j["config"] = config_json(d.config);
   if (d.steady) {
-    j["steady_state"] = {{"ok", d.steady->ok}, {"p0_kw", d.steady->p0_kw},
-                         {"noise_pct", d.steady->noise_pct}, {"drift_pct", d.steady->drift_pct},
-                         {"duration_s", d.steady->duration_s}, {"reason", d.steady->reason}};
+    j["steady_state"] = {{"ok", d.steady->ok},
+                         {"p0_kw", d.steady->p0_kw},
+                         {"noise_pct", d.steady->noise_pct},
+                         {"drift_pct", d.steady->drift_pct},
+                         {"duration_s", d.steady->duration_s},
+                         {"reason", d.steady->reason}};
   }
   if (d.pilot) {
-    j["pilot"] = {{"ok", d.pilot->ok}, {"gain_kw_per_pct", d.pilot->gain_kw_per_pct},
+    j["pilot"] = {{"ok", d.pilot->ok},
+                  {"gain_kw_per_pct", d.pilot->gain_kw_per_pct},
                   {"applied_std_pct", d.pilot->applied_std_pct},
                   {"planned_std_pct", d.pilot->planned_std_pct},
                   {"predicted_peak_kw", d.pilot->predicted_peak_kw},
-                  {"band_kw", d.pilot->band_kw}, {"limited_by_clamp", d.pilot->limited_by_clamp}};
+                  {"band_kw", d.pilot->band_kw},
+                  {"limited_by_clamp", d.pilot->limited_by_clamp}};
   }
-  j["excitation"] = {{"std_pct", d.excitation_sigma_pct}, {"duration_s", d.excitation_s},
+  j["excitation"] = {{"std_pct", d.excitation_sigma_pct},
+                     {"duration_s", d.excitation_s},
                      {"stop_reason", d.stop_reason}};
   if (d.mmfm) {
     const auto& m = *d.mmfm;
@@ -171,7 +194,8 @@ json report_json(const SessionData& d) {
                                         {"tick", d.trip->tick}}
                                  : json(nullptr)}};
   json events = json::array();
-  for (const auto& e : d.events) events.push_back({{"t_s", e.t_s}, {"kind", e.kind}, {"text", e.text}});
+  for (const auto& e : d.events)
+    events.push_back({{"t_s", e.t_s}, {"kind", e.kind}, {"text", e.text}});
   j["events"] = events;
   j["timing"] = {{"test_time_s", d.test_time_s}, {"wall_time_s", d.wall_time_s}};
   j["loop_timing"] = loop_timing_json(d.loop_timing);
@@ -221,10 +245,14 @@ void write_outputs(const SessionData& d, const std::filesystem::path& out) {
       m.units = "kW/%";
       m.extra["parameters"] = parameters_json(d.mmfm->parameters);
       m.extra["method"] = "mmfm";
+      // Its dead time refers to the plant: the rig's sample timing (bias held for a sample,
+      // power read a sample after the write in lockstep) is taken out (docs/decisions.md).
+      m.extra["timing"] = "plant";
       io::write_model(out / "model.json", m);
     });
   }
-  if (!d.sweep.empty()) attempt("sweep.csv", [&] { io::write_frf(out / "sweep.csv", to_frf(d.sweep)); });
+  if (!d.sweep.empty())
+    attempt("sweep.csv", [&] { io::write_frf(out / "sweep.csv", to_frf(d.sweep)); });
   if (!d.h1.empty()) attempt("h1.csv", [&] { io::write_frf(out / "h1.csv", to_frf(d.h1)); });
   attempt("report.json", [&] { report::write_json_file(out / "report.json", report_json(d)); });
   attempt("report.html", [&] { write_report_html(d, out / "report.html"); });
