@@ -48,6 +48,31 @@ double bartlett_factor(const Eigen::VectorXd& a, const Eigen::VectorXd& b, Eigen
 
 }  // namespace
 
+// A residual that is loud where the input-driven signal is loud (a gain error in a record
+// whose excitation level changes, as a commissioning test's phases do) is not located in
+// time. The quiet windows give the residual's mean square as noise floor plus a share of
+// the model output's, e_r = a + b e_z (least squares, a, b >= 0); a loud window stays
+// located only when it exceeds that prediction by more than (1.5)^2.
+void keep_unless_signal_proportional(const Eigen::VectorXd& z, Eigen::Index w,
+                                     const std::vector<double>& lms, std::vector<bool>& loud) {
+  const std::size_t m = lms.size();
+  std::vector<double> ez(m), er(m);
+  double sxx = 0, sx = 0, sy = 0, sxy = 0, k = 0;
+  for (std::size_t i = 0; i < m; ++i) {
+    const Eigen::VectorXd zs = z.segment(static_cast<Eigen::Index>(i) * w, w);
+    ez[i] = (zs.array() - zs.mean()).square().mean();
+    er[i] = std::exp(lms[i]);
+    if (loud[i]) continue;
+    sxx += ez[i] * ez[i], sx += ez[i], sy += er[i], sxy += ez[i] * er[i], ++k;
+  }
+  const double det = k * sxx - sx * sx;
+  if (k < 4 || det <= 1e-12 * k * sxx) return;  // the quiet windows do not span signal levels
+  const double b = std::max(0.0, (k * sxy - sx * sy) / det);
+  const double a = std::max(0.0, (sy - b * sx) / k);
+  for (std::size_t i = 0; i < m; ++i)
+    if (loud[i] && er[i] <= 2.25 * (a + b * ez[i])) loud[i] = false;
+}
+
 std::vector<TimeWindow> locate_time(const Problem& pr, const Eigen::VectorXd& r_all) {
   Eigen::Index start = 0;  // after the warm-up
   const Eigen::Index n = r_all.size();
@@ -74,9 +99,15 @@ std::vector<TimeWindow> locate_time(const Problem& pr, const Eigen::VectorXd& r_
   const double s = 1.5 * std::sqrt(2.0 * c / static_cast<double>(w));
   // Reference: the lower quartile is 0.67 standard deviations below the quiet windows' mean.
   const double ref = quantile(lms, 0.25) + 0.67 * s;
+  std::vector<bool> loud(lms.size());
   for (std::size_t i = 0; i < lms.size(); ++i) {
     const double excess = lms[i] - ref;
-    if (excess <= 4.5 * s || excess <= 2.0 * std::log(1.15)) continue;
+    loud[i] = excess > 4.5 * s && excess > 2.0 * std::log(1.15);
+  }
+  keep_unless_signal_proportional(pr.baseline_z.tail(n - start), w, lms, loud);
+  for (std::size_t i = 0; i < lms.size(); ++i) {
+    const double excess = lms[i] - ref;
+    if (!loud[i]) continue;
     const double t0 = static_cast<double>(start + static_cast<Eigen::Index>(i) * w) * pr.dt_s;
     const double t1 = t0 + static_cast<double>(w) * pr.dt_s;
     const double ratio = std::exp(0.5 * excess);

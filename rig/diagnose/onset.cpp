@@ -20,11 +20,22 @@ ChangePoint change_point(const Problem& pr, const Eigen::VectorXd& base,
   const Eigen::Index w = (n - start) / nw;
   ChangePoint cp;
   if (w < 16) return cp;
-  std::vector<double> gain(nw);
+  // The gain per window over the window's signal energy (the baseline output's mean square,
+  // floored at a tenth of its median): an effect whose gain follows the excitation level
+  // (a gain error in a record whose phases excite at different levels) has no onset.
+  std::vector<double> gain(nw), energy(nw);
+  for (int i = 0; i < nw; ++i) {
+    const Eigen::VectorXd z = pr.baseline_z.segment(start + i * w, w);
+    energy[static_cast<std::size_t>(i)] = (z.array() - z.mean()).square().mean();
+  }
+  std::vector<double> sorted = energy;
+  std::nth_element(sorted.begin(), sorted.begin() + nw / 2, sorted.end());
+  const double floor = std::max(0.1 * sorted[nw / 2], 1e-300);
   for (int i = 0; i < nw; ++i) {
     const Eigen::Index k = start + i * w;
     gain[static_cast<std::size_t>(i)] =
-        (pr.y - base).segment(k, w).squaredNorm() - (pr.y - aug).segment(k, w).squaredNorm();
+        ((pr.y - base).segment(k, w).squaredNorm() - (pr.y - aug).segment(k, w).squaredNorm()) /
+        std::max(energy[static_cast<std::size_t>(i)], floor);
   }
   double best_t = 0.0;
   for (int k = 4; k <= nw - 4; ++k) {
