@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "recording_out.hpp"
 #include "rig/diagnose/concealed.hpp"
 
 using namespace rig::diagnose;
@@ -89,17 +90,7 @@ int main(int argc, char** argv) {
           "{:5.1f} s\n",
           truth, spec.seed, to_string(spec.concealment), r.verdict, row.param_err_pct,
           row.vfit_before, row.vfit_after, row.seconds);
-      if (verbose) {
-        fmt::print("    {}\n", r.explanation);
-        for (std::size_t i = 0; i < std::min<std::size_t>(4, r.hypotheses.size()); ++i) {
-          const auto& hh = r.hypotheses[i];
-          std::string ps;
-          for (const auto& a : hh.effects)
-            for (double p : a.params) ps += fmt::format(" {:.4g}", p);
-          fmt::print("    #{} {} [{} ] vfit {:.1f}->{:.1f} score {:+.2f}\n", i + 1, hh.name(), ps,
-                     hh.validation_fit_before, hh.validation_fit_after, hh.score);
-        }
-      }
+      if (verbose) bench::print_hypotheses(r);
       std::fflush(stdout);
       rows.push_back(row);
     }

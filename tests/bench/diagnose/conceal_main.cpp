@@ -5,14 +5,13 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
-#include <fstream>
 #include <string>
 
+#include "recording_out.hpp"
 #include "rig/diagnose/concealed.hpp"
-#include "rig/io/model_file.hpp"
-#include "rig/io/sidecar.hpp"
 
 using namespace rig::diagnose;
+using rig::diagnose::bench::write_diagnose_recording;
 
 int main(int argc, char** argv) {
   std::string effect = "none", concealment = "noise", out;
@@ -42,25 +41,8 @@ int main(int argc, char** argv) {
   if (!found || out.empty())
     return std::fprintf(stderr, "diagnose_conceal: see the usage in the source\n"), 2;
   const ConcealedRecording rec = make_concealed(spec);
-  const std::filesystem::path dir(out);
-  std::filesystem::create_directories(dir);
-  std::ofstream csv(dir / "rec.csv");
-  csv.precision(12);
-  csv << "t,u,y\n";
-  for (Eigen::Index k = 0; k < rec.input.u.size(); ++k)
-    csv << static_cast<double>(k) * rec.input.dt_s << ',' << rec.input.u(k) << ',' << rec.input.y(k)
-        << '\n';
-  rig::io::Sidecar sc;
-  sc.sample_rate_hz = 1.0 / rec.input.dt_s;
-  sc.units = {{"t", "s"}, {"u", "%"}, {"y", "kW"}};
-  sc.seed = spec.seed;
-  if (rec.input.output_rc_s) sc.coupling_rc_s = *rec.input.output_rc_s, sc.coupled_columns = {"y"};
-  rig::io::write_sidecar(dir / "rec.json", sc);
-  rig::io::ModelFile m;
-  m.tf = rec.input.model;
-  m.input = "u", m.output = "y";
-  m.units = {{"input", "% of rated power"}, {"output", "kW"}};
-  rig::io::write_model(dir / "model.json", m);
+  write_diagnose_recording(out, rec.input.u, rec.input.y, rec.input.dt_s, spec.seed,
+                           rec.input.output_rc_s, &rec.input.model);
   std::printf("%s\n  truth:", rec.description.c_str());
   for (double p : rec.truth) std::printf(" %.6g", p);
   std::printf("\n");

@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "plant_cases.hpp"
+#include "recording_out.hpp"
 
 using namespace rig::diagnose;
 using namespace rig::diagnose::bench;
@@ -37,18 +38,6 @@ double param_error_pct(const PlantCase& pc, const DiagnoseResult& r) {
     if (verdict_matches(to_string(e.effect), r.verdict) && !e.params.empty())
       return 100.0 * (e.params[0] - pc.truth) / pc.truth;
   return NAN;
-}
-
-void print_hypotheses(const DiagnoseResult& r) {
-  fmt::print("    {}\n", r.explanation);
-  for (std::size_t i = 0; i < std::min<std::size_t>(4, r.hypotheses.size()); ++i) {
-    const auto& h = r.hypotheses[i];
-    std::string ps;
-    for (const auto& a : h.effects)
-      for (double p : a.params) ps += fmt::format(" {:.4g}", p);
-    fmt::print("    #{} {} [{} ] vfit {:.1f}->{:.1f} score {:+.2f}\n", i + 1, h.name(), ps,
-               h.validation_fit_before, h.validation_fit_after, h.score);
-  }
 }
 
 void print_summary(const std::vector<Row>& rows, double duration_s) {

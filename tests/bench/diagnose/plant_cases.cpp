@@ -144,6 +144,27 @@ double truth_of(const PlantEffect& e, const std::vector<std::string>& faults) {
 
 }  // namespace
 
+PlantRecord record_plant(const std::vector<std::string>& faults, std::uint64_t plant_seed,
+                         std::uint64_t excitation_seed, double duration_s, double settle_s) {
+  plantsim::PlantOptions po;
+  po.faults = faults;
+  po.seed = plant_seed;
+  po.tick = std::chrono::milliseconds(10);
+  auto plant = plantsim::make_plant(po);
+  const auto n = static_cast<Eigen::Index>(std::llround(duration_s / kDt));
+  signal::GaussianOptions go;
+  go.n = n, go.dt_s = kDt, go.bandwidth_hz = 4.0, go.sigma = kBiasRms, go.clip_sigma = 3.0;
+  go.seed = excitation_seed;
+  PlantRecord r{signal::gaussian_excitation(go), Eigen::VectorXd(n)};
+  for (int k = 0; k < static_cast<int>(std::llround(settle_s / kDt)); ++k) plant->step();
+  for (Eigen::Index k = 0; k < n; ++k) {
+    plant->set_bias_pct(r.u(k));
+    r.y(k) = plant->measure().power_w / 1e3;
+    plant->step();
+  }
+  return r;
+}
+
 PlantCase make_plant_case(const PlantCaseSpec& spec) {
   const PlantEffect& eff = find_effect(spec.effect);
   bool known = false;
@@ -164,26 +185,13 @@ PlantCase make_plant_case(const PlantCaseSpec& spec) {
   pc.faults = at_start;
   pc.faults.insert(pc.faults.end(), effect_faults.begin(), effect_faults.end());
 
-  plantsim::PlantOptions po;
-  po.faults = pc.faults;
-  po.seed = spec.seed;
-  po.tick = std::chrono::milliseconds(10);
-  auto plant = plantsim::make_plant(po);
-  const auto n = static_cast<Eigen::Index>(std::llround(spec.duration_s / kDt));
-  signal::GaussianOptions go;
-  go.n = n, go.dt_s = kDt, go.bandwidth_hz = 4.0, go.sigma = kBiasRms, go.clip_sigma = 3.0;
-  go.seed = spec.seed * 7919 + 17;
-  pc.input.u = signal::gaussian_excitation(go);
-  pc.input.y.resize(n);
+  PlantRecord rec =
+      record_plant(pc.faults, spec.seed, spec.seed * 7919 + 17, spec.duration_s, kSettleS);
+  pc.input.u = std::move(rec.u);
+  pc.input.y = std::move(rec.y);
   pc.input.dt_s = kDt;
   pc.input.model = nominal_tf();
   if (spec.concealment == "ac_coupling") pc.input.output_rc_s = kCouplingRc;
-  for (int k = 0; k < static_cast<int>(kSettleS / kDt); ++k) plant->step();
-  for (Eigen::Index k = 0; k < n; ++k) {
-    plant->set_bias_pct(pc.input.u(k));
-    pc.input.y(k) = plant->measure().power_w / 1e3;
-    plant->step();
-  }
   pc.truth = truth_of(eff, effect_faults);
   pc.param =
       eff.effect == "none" ? "" : parameter_specs(*effect_from_string(eff.effect), {})[0].name;

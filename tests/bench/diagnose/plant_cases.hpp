@@ -41,6 +41,16 @@ const std::vector<std::string>& concealments();  // noise, drift, ac_coupling, p
 // coupling would remove most of a slow drift.
 std::vector<std::string> concealments_for(const std::string& effect);
 
+// The plant (Stornoway preset, 10 ms tick, the preset's own disturbances, `faults` as
+// plantsim --fault strings) driven by the +-3 % power Gaussian bias of every plant case
+// (0.8 % rms, 4 Hz band, clipped at 3 sigma, drawn with `excitation_seed`) at 100 Hz after
+// settle_s at the operating point: u, and y in kW measured before each u is applied.
+struct PlantRecord {
+  Eigen::VectorXd u, y;
+};
+PlantRecord record_plant(const std::vector<std::string>& faults, std::uint64_t plant_seed,
+                         std::uint64_t excitation_seed, double duration_s, double settle_s);
+
 struct PlantCaseSpec {
   std::string effect = "none";
   std::string concealment = "noise";

@@ -15,32 +15,15 @@
 #include <string>
 
 #include "plant_cases.hpp"
-#include "rig/io/model_file.hpp"
-#include "rig/io/sidecar.hpp"
+#include "recording_out.hpp"
 
 using namespace rig::diagnose::bench;
 
 namespace {
 
 void write_case(const PlantCase& pc, const PlantCaseSpec& spec, const std::filesystem::path& dir) {
-  std::filesystem::create_directories(dir);
-  std::ofstream csv(dir / "rec.csv");
-  csv.precision(10);
-  csv << "t,u,y\n";
-  for (Eigen::Index k = 0; k < pc.input.u.size(); ++k)
-    csv << static_cast<double>(k) * pc.input.dt_s << ',' << pc.input.u(k) << ',' << pc.input.y(k)
-        << '\n';
-  rig::io::Sidecar sc;
-  sc.sample_rate_hz = 1.0 / pc.input.dt_s;
-  sc.units = {{"t", "s"}, {"u", "%"}, {"y", "kW"}};
-  sc.seed = spec.seed;
-  if (pc.input.output_rc_s) sc.coupling_rc_s = *pc.input.output_rc_s, sc.coupled_columns = {"y"};
-  rig::io::write_sidecar(dir / "rec.json", sc);
-  rig::io::ModelFile m;
-  m.tf = pc.input.model;
-  m.input = "u", m.output = "y";
-  m.units = {{"input", "% of rated power"}, {"output", "kW"}};
-  rig::io::write_model(dir / "model.json", m);
+  write_diagnose_recording(dir, pc.input.u, pc.input.y, pc.input.dt_s, spec.seed,
+                           pc.input.output_rc_s, &pc.input.model);
   nlohmann::json truth = {{"effect", spec.effect}, {"concealment", spec.concealment},
                           {"seed", spec.seed},     {"plant_faults", pc.faults},
                           {"param", pc.param},     {"description", pc.description}};

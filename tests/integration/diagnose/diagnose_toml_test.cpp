@@ -15,11 +15,12 @@
 #include <string>
 #include <vector>
 
+#include "plant_cases.hpp"
 #include "plantsim/plant/config.hpp"
 #include "plantsim/plant/parameters.hpp"
 #include "plantsim/plant/plant.hpp"
+#include "recording_out.hpp"
 #include "rig/cli/diagnose_plant.hpp"
-#include "rig/io/sidecar.hpp"
 #include "rig/signal/excitation.hpp"
 
 namespace fs = std::filesystem;
@@ -35,35 +36,13 @@ fs::path source_dir() {
   return s ? s : ".";
 }
 
-// 10 ms ticks, +-3 sigma Gaussian bias (0.8 %, 4 Hz), the preset's own noise, drift, pick-up
-// and ripple; rec.csv (t,u,y) and its sidecar with the units.
+// The plant cases' recording (plant_cases.hpp: 10 ms ticks, +-3 sigma Gaussian bias of
+// 0.8 %, 4 Hz, the preset's own disturbances, 5 s settling): rec.csv (t,u,y) and its sidecar.
 void write_plant_recording(const fs::path& dir, const std::vector<std::string>& faults,
                            std::uint64_t seed, double duration_s) {
-  plantsim::PlantOptions po;
-  po.faults = faults;
-  po.seed = seed;
-  po.tick = std::chrono::milliseconds(10);
-  auto plant = plantsim::make_plant(po);
-  const Eigen::Index n = static_cast<Eigen::Index>(duration_s / 0.01);
-  rig::signal::GaussianOptions go;
-  go.n = n, go.dt_s = 0.01, go.bandwidth_hz = 4.0, go.sigma = 0.8, go.clip_sigma = 3.0,
-  go.seed = seed;
-  const Eigen::VectorXd u = rig::signal::gaussian_excitation(go);
-  for (int k = 0; k < 500; ++k) plant->step();  // settle at the operating point
-  std::ofstream csv(dir / "rec.csv");
-  csv.precision(10);
-  csv << "t,u,y\n";
-  for (Eigen::Index k = 0; k < n; ++k) {
-    plant->set_bias_pct(u(k));
-    csv << static_cast<double>(k) * 0.01 << ',' << u(k) << ',' << plant->measure().power_w / 1e3
-        << '\n';
-    plant->step();
-  }
-  rig::io::Sidecar sc;
-  sc.sample_rate_hz = 100.0;
-  sc.units = {{"t", "s"}, {"u", "%"}, {"y", "kW"}};
-  sc.seed = seed;
-  rig::io::write_sidecar(dir / "rec.json", sc);
+  const auto rec = rig::diagnose::bench::record_plant(faults, seed, seed, duration_s, 5.0);
+  rig::diagnose::bench::write_diagnose_recording(dir, rec.u, rec.y, 0.01, seed, std::nullopt,
+                                                 nullptr);
   std::printf("recording: faults [%s] seed %llu, %.0f s\n",
               faults.empty() ? "" : faults.front().c_str(), static_cast<unsigned long long>(seed),
               duration_s);

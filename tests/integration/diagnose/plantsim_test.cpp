@@ -10,36 +10,11 @@
 #include <string>
 #include <vector>
 
-#include "plantsim/plant/plant.hpp"
+#include "plant_cases.hpp"
 #include "rig/diagnose/diagnose.hpp"
 #include "rig/io/model_file.hpp"
-#include "rig/signal/excitation.hpp"
 
 namespace {
-
-struct Record {
-  Eigen::VectorXd u, y;
-};
-
-Record run_plant(const std::vector<std::string>& faults, std::uint64_t seed, double duration_s) {
-  plantsim::PlantOptions po;
-  po.faults = faults;
-  po.seed = seed;
-  po.tick = std::chrono::milliseconds(10);
-  auto plant = plantsim::make_plant(po);
-  const Eigen::Index n = static_cast<Eigen::Index>(duration_s / 0.01);
-  rig::signal::GaussianOptions go;
-  go.n = n, go.dt_s = 0.01, go.bandwidth_hz = 4.0, go.sigma = 0.8, go.clip_sigma = 3.0,
-  go.seed = seed;
-  Record r{rig::signal::gaussian_excitation(go), Eigen::VectorXd(n)};
-  for (int k = 0; k < 500; ++k) plant->step();  // settle at the operating point
-  for (Eigen::Index k = 0; k < n; ++k) {
-    plant->set_bias_pct(r.u(k));
-    r.y(k) = plant->measure().power_w / 1e3;
-    plant->step();
-  }
-  return r;
-}
 
 rig::diagnose::DiagnoseResult diagnose_plant(const std::vector<std::string>& faults,
                                              std::uint64_t seed) {
@@ -49,7 +24,7 @@ rig::diagnose::DiagnoseResult diagnose_plant(const std::vector<std::string>& fau
   // The plant holds each bias for a tick (zero-order hold), which the first-order-hold
   // simulation sees as half a sample of extra dead time: part of the known recording chain.
   model.tf.delay_s += 0.005;
-  const Record rec = run_plant(faults, seed, 200.0);
+  const auto rec = rig::diagnose::bench::record_plant(faults, seed, seed, 200.0, 5.0);
   auto r = rig::diagnose::diagnose({model.tf, rec.u, rec.y, 0.01, std::nullopt});
   std::printf("faults [%s] seed %llu: verdict %s (validation fit %.1f %%)\n  %s\n",
               faults.empty() ? "" : faults.front().c_str(), static_cast<unsigned long long>(seed),
