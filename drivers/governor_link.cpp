@@ -24,6 +24,10 @@ const char* to_string(LinkErrorKind kind) {
   return "unknown link error";
 }
 
+LinkResult<double> GovernorLink::read_held_bias() {
+  return LinkError{LinkErrorKind::kUnavailable, uri(), "this link cannot read back the held bias"};
+}
+
 std::string LinkError::message() const {
   std::string text = to_string(kind);
   if (!where.empty()) text += " at " + where;

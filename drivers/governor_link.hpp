@@ -11,11 +11,11 @@
 
 #include <chrono>
 #include <cstdint>
+#include <memory>
 #include <optional>
+#include <string>
 #include <utility>
 #include <variant>
-#include <memory>
-#include <string>
 
 namespace drivers {
 
@@ -30,14 +30,14 @@ enum StatusBit : std::uint16_t {
 
 // One reading of the plant, in engineering units.
 struct Sample {
-  double plant_time_s = 0.0;      // governor/plant clock (input regs 7-8), 0 if unknown
-  double power_kw = 0.0;          // electrical power
+  double plant_time_s = 0.0;  // governor/plant clock (input regs 7-8), 0 if unknown
+  double power_kw = 0.0;      // electrical power
   double speed_rpm = 0.0;
   double freq_hz = 0.0;
   double voltage_v = 0.0;
-  double bias_echo_pct = 0.0;     // bias as applied by the governor, % of rated power
-  std::uint16_t status = 0;       // StatusBit flags
-  std::uint16_t counter = 0;      // +1 per plant tick; a counter that does not move is stale
+  double bias_echo_pct = 0.0;  // bias as applied by the governor, % of rated power
+  std::uint16_t status = 0;    // StatusBit flags
+  std::uint16_t counter = 0;   // +1 per plant tick; a counter that does not move is stale
 };
 
 enum class LinkErrorKind {
@@ -53,8 +53,8 @@ enum class LinkErrorKind {
 
 struct LinkError {
   LinkErrorKind kind;
-  std::string where;   // register / PGN / device, e.g. "holding 0" or "PGN 0xFF51"
-  std::string detail;  // OS or libmodbus text
+  std::string where;            // register / PGN / device, e.g. "holding 0" or "PGN 0xFF51"
+  std::string detail;           // OS or libmodbus text
   std::string message() const;  // one line: "<kind> at <where>: <detail>"
 };
 
@@ -64,8 +64,8 @@ const char* to_string(LinkErrorKind kind);
 template <class T>
 class [[nodiscard]] LinkResult {
  public:
-  LinkResult(T value) : v_(std::move(value)) {}            // NOLINT: implicit by design
-  LinkResult(LinkError error) : v_(std::move(error)) {}    // NOLINT
+  LinkResult(T value) : v_(std::move(value)) {}          // NOLINT: implicit by design
+  LinkResult(LinkError error) : v_(std::move(error)) {}  // NOLINT
   bool has_value() const { return v_.index() == 0; }
   explicit operator bool() const { return has_value(); }
   const T& value() const { return std::get<0>(v_); }
@@ -82,7 +82,7 @@ template <>
 class [[nodiscard]] LinkResult<void> {
  public:
   LinkResult() = default;
-  LinkResult(LinkError error) : e_(std::move(error)) {}    // NOLINT
+  LinkResult(LinkError error) : e_(std::move(error)) {}  // NOLINT
   bool has_value() const { return !e_.has_value(); }
   explicit operator bool() const { return has_value(); }
   const LinkError& error() const { return *e_; }
@@ -101,6 +101,10 @@ class GovernorLink {
   virtual LinkResult<Sample> read() = 0;
   // Lockstep only (simulated plants): advance the plant by `ticks` before the next read.
   virtual LinkResult<void> advance(std::uint16_t ticks) = 0;
+  // The bias the governor holds now, read back from the governor (Modbus: holding 0; CAN: the
+  // last echo frame). The ramp-down starts from it, never from a stale value (DESIGN.md
+  // section 8). The default says it cannot be read; callers then use what they last sent.
+  virtual LinkResult<double> read_held_bias();
   virtual LinkResult<void> deactivate() = 0;
   virtual void close() = 0;
   virtual std::string uri() const = 0;

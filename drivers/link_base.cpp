@@ -53,9 +53,14 @@ LinkError LinkBase::not_configured(const std::string& call) const {
 }
 
 // Linear ramp b_i = b0 (1 - i/N), N = ceil(|b0| / (rate * period)), so the governor never sees
-// a step larger than rate * period when the external bias is withdrawn.
+// a step larger than rate * period when the external bias is withdrawn. b0 is the bias the
+// governor holds now, read back (read_held_bias): after a refused or late write the last
+// acknowledged value is stale, and ramping from it would raise the bias again first. Only
+// when the governor cannot be asked is the last acknowledged write used.
 LinkResult<void> LinkBase::deactivate() {
-  const double start_pct = last_bias_pct_;
+  double start_pct = last_bias_pct_;
+  if (auto held = read_held_bias(); held) start_pct = held.value();
+  ramp_start_pct_ = start_pct;
   const double period_s = std::chrono::duration<double>(options_.ramp_period).count();
   const double step_pct = options_.ramp_rate_pct_per_s * period_s;
   const int steps =

@@ -39,13 +39,16 @@ class LinkBase : public GovernorLink {
  public:
   explicit LinkBase(LinkOptions options) : options_(options) {}
   LinkResult<void> deactivate() override;
+  // Where the last deactivate() started its ramp (the bias read back from the governor).
+  double ramp_start_pct() const { return ramp_start_pct_; }
 
  protected:
   virtual LinkResult<void> disable() = 0;  // writes bias 0 with the enable bit cleared
   LinkError not_configured(const std::string& call) const;
 
   LinkOptions options_;
-  double last_bias_pct_ = 0.0;  // last bias written (after quantisation)
+  double last_bias_pct_ = 0.0;  // last bias written and acknowledged (after quantisation)
+  double ramp_start_pct_ = 0.0;
 };
 
 }  // namespace drivers

@@ -55,6 +55,7 @@ class ModbusLink final : public LinkBase {
   LinkResult<void> write(double bias_pct) override;
   LinkResult<Sample> read() override;
   LinkResult<void> advance(std::uint16_t ticks) override;
+  LinkResult<double> read_held_bias() override;
   void close() override { ctx_.reset(); }
   std::string uri() const override { return uri_.text; }
 
@@ -131,6 +132,20 @@ LinkResult<void> ModbusLink::advance(std::uint16_t ticks) {
   auto r = write_holding(map::kHoldLockstepTicks, 1, &value);
   if (r) counter_.expect_ticks(ticks);
   return r;
+}
+
+// What the governor applies now: the echo, input 5 (after a heartbeat loss the governor has
+// dropped the bias though holding 0 may still hold it; the ramp must not re-apply that).
+LinkResult<double> ModbusLink::read_held_bias() {
+  const std::string where = "input " + std::to_string(map::kInBiasEcho);
+  if (!ctx_) return not_configured(where + " read");
+  std::uint16_t echo = 0;
+  if (modbus_read_input_registers(ctx_.get(), map::kInBiasEcho, 1, &echo) != 1) {
+    const int err = errno;
+    if (err == ETIMEDOUT) modbus_flush(ctx_.get());
+    return modbus_error(err, where);
+  }
+  return bias_from_raw(static_cast<std::int16_t>(echo));
 }
 
 LinkResult<Sample> ModbusLink::read() {

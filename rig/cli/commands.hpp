@@ -3,19 +3,15 @@
 // non-zero exit code; main() returns it (parse errors become kExitUsage).
 #pragma once
 
+#include "rig/io/exit_code.hpp"
+
 namespace CLI {
 class App;
 }
 
 namespace rig::cli {
 
-enum ExitCode : int {
-  kExitOk = 0,
-  kExitAcceptance = 1,  // the command ran, its acceptance / data-quality checks failed
-  kExitUsage = 2,       // usage, configuration or input-file error
-  kExitLinkFault = 3,   // link or plant fault, test aborted safely
-  kExitSafety = 4,      // power-limit breach or supervisor trip
-};
+// Exit codes: rig::ExitCode (rig/io/exit_code.hpp), the one definition for every command.
 
 // rig identify --recording REC.csv [...] --out DIR   (identify.cpp)
 void add_identify_command(CLI::App& app);

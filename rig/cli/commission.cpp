@@ -1,7 +1,7 @@
 // `rig commission`: the commissioning test (DESIGN.md section 4).
-#include <CLI/CLI.hpp>
 #include <fmt/format.h>
 
+#include <CLI/CLI.hpp>
 #include <memory>
 
 #include "rig/cli/session_commands.hpp"
@@ -32,17 +32,13 @@ void add_session_options(CLI::App& cmd, SessionArgs& a) {
 
 void add_commission_command(CLI::App& app) {
   auto args = std::make_shared<SessionArgs>();
-  CLI::App* cmd = app.add_subcommand(
-      "commission", "Commissioning test: steady-state check, pilot, excitation with online "
-                    "MMFM, swept sine, comparison, report");
+  CLI::App* cmd =
+      app.add_subcommand("commission",
+                         "Commissioning test: steady-state check, pilot, excitation with online "
+                         "MMFM, swept sine, comparison, report");
   add_session_options(*cmd, *args);
   cmd->callback([args] {
-    int code = session::kExitConfig;
-    try {
-      code = run_session(*args, load_config(*args, "commission"), "commission");
-    } catch (const session::ConfigError& e) {
-      fmt::print(stderr, "rig commission: {}\n", e.what());
-    }
+    const int code = run_session(*args, load_config(*args, "commission"), "commission");
     if (code != 0) throw CLI::RuntimeError(code);
   });
 }

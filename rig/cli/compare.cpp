@@ -1,18 +1,21 @@
 // `rig compare`: a model against a measured frequency response (DESIGN.md section 4).
 // Exit 0 when every checked point is within tolerance, 1 when not (or too few points are
 // good enough to judge), 2 for unreadable input.
-#include <CLI/CLI.hpp>
+#include "rig/fra/compare.hpp"
+
 #include <fmt/format.h>
 
+#include <CLI/CLI.hpp>
 #include <complex>
 #include <filesystem>
 #include <memory>
 
 #include "rig/cli/session_commands.hpp"
-#include "rig/fra/compare.hpp"
+#include "rig/io/exit_code.hpp"
 #include "rig/io/frf_file.hpp"
 #include "rig/io/input_error.hpp"
 #include "rig/io/model_file.hpp"
+#include "rig/io/out_dir.hpp"
 #include "rig/report/bode_chart.hpp"
 #include "rig/report/html_report.hpp"
 #include "rig/report/json_out.hpp"
@@ -24,6 +27,7 @@ struct CompareArgs {
   std::filesystem::path model, frf, out;
   fra::CompareTolerances tol;
   bool json = false;
+  bool force = false;
 };
 
 std::vector<fra::FrfPoint> frf_points(const io::Frf& f) {
@@ -53,9 +57,12 @@ nlohmann::json result_json(const CompareArgs& a, const fra::CompareResult& r) {
   return {{"command", "compare"},
           {"model", a.model.string()},
           {"frf", a.frf.string()},
-          {"tolerances", {{"mag_db", a.tol.mag_db}, {"phase_deg", a.tol.phase_deg},
-                          {"from_hz", a.tol.f_lo_hz}, {"to_hz", a.tol.f_hi_hz},
-                          {"min_coherence", a.tol.min_coherence}}},
+          {"tolerances",
+           {{"mag_db", a.tol.mag_db},
+            {"phase_deg", a.tol.phase_deg},
+            {"from_hz", a.tol.f_lo_hz},
+            {"to_hz", a.tol.f_hi_hz},
+            {"min_coherence", a.tol.min_coherence}}},
           {"verdict", fra::to_string(r.verdict)},
           {"checked", r.checked},
           {"failed", r.failed},
@@ -79,7 +86,8 @@ void write_html(const CompareArgs& a, const ident::TransferFunction& tf,
   page.note(r.verdict == fra::Verdict::kPass ? report::Tone::kOk : report::Tone::kWarning,
             r.summary);
   auto [mag, phase] = report::bode_charts(
-      "Model vs measured", f, {{"model", model, {}, {}, false, ""}, {"measured", measured, {}, {}, true, ""}});
+      "Model vs measured", f,
+      {{"model", model, {}, {}, false, ""}, {"measured", measured, {}, {}, true, ""}});
   page.section("Frequency response").chart(mag).chart(phase);
   report::Table t{{"freq (Hz)", "mag error (dB)", "phase error (deg)", "checked", "pass"}, {}, {}};
   for (const auto& row : r.rows) {
@@ -92,18 +100,11 @@ void write_html(const CompareArgs& a, const ident::TransferFunction& tf,
 }
 
 int run_compare(const CompareArgs& a) {
-  io::ModelFile model;
-  io::Frf frf;
-  try {
-    model = io::read_model(a.model);
-    frf = io::read_frf(a.frf);
-  } catch (const io::InputError& e) {
-    fmt::print(stderr, "rig compare: {}\n", e.what());
-    return 2;
-  }
+  io::prepare_out_dir(a.out, a.force);
+  const io::ModelFile model = io::read_model(a.model);
+  const io::Frf frf = io::read_frf(a.frf);
   const auto pts = frf_points(frf);
   const fra::CompareResult r = fra::compare(model.tf, pts, a.tol);
-  std::filesystem::create_directories(a.out);
   const nlohmann::json doc = result_json(a, r);
   report::write_json_file(a.out / "report.json", doc);
   write_html(a, model.tf, pts, r);
@@ -122,7 +123,9 @@ void add_compare_command(CLI::App& app) {
   CLI::App* cmd = app.add_subcommand("compare", "Compare a model with a measured FRF");
   cmd->add_option("--model", a->model, "Model JSON")->required();
   cmd->add_option("--frf", a->frf, "FRF CSV (freq_hz,mag,phase_deg,coherence)")->required();
-  cmd->add_option("--out", a->out, "Output folder")->required();
+  cmd->add_option("--out", a->out, "Output folder (must be new or empty, see --force)")->required();
+  cmd->add_flag("--force", a->force,
+                "Clear a non-empty --out folder first (an earlier run's files)");
   cmd->add_option("--mag-tol-db", a->tol.mag_db, "Magnitude tolerance, dB")->default_val(1.0);
   cmd->add_option("--phase-tol-deg", a->tol.phase_deg, "Phase tolerance, deg")->default_val(5.0);
   cmd->add_option("--from", a->tol.f_lo_hz, "Check from, Hz")->default_val(0.5);
@@ -131,7 +134,7 @@ void add_compare_command(CLI::App& app) {
   cmd->add_flag("--json", a->json, "Print report.json on stdout");
   cmd->callback([a] {
     const int code = run_compare(*a);
-    if (code != 0) throw CLI::RuntimeError(code);
+    if (code != kExitOk) throw CLI::RuntimeError(code);
   });
 }
 

@@ -26,6 +26,7 @@
 #include "rig/diagnose/report_out.hpp"
 #include "rig/io/input_error.hpp"
 #include "rig/io/model_file.hpp"
+#include "rig/io/out_dir.hpp"
 #include "rig/io/recording.hpp"
 #include "rig/report/json_out.hpp"
 #include "rig/session/emulator.hpp"
@@ -38,7 +39,7 @@ struct DiagnoseArgs {
   std::filesystem::path recording, model, out;
   std::string input, output, columns;
   std::optional<double> dt_s;
-  bool no_pairs = false, json = false, no_plant_check = false;
+  bool no_pairs = false, json = false, no_plant_check = false, force = false;
 };
 
 [[noreturn]] void bad(const std::string& file, const std::string& field, const std::string& what) {
@@ -135,6 +136,7 @@ double row_alignment_s(const io::Recording& rec) {
 
 int run_diagnose(const DiagnoseArgs& a) {
   const bool plant_toml = a.model.extension().string() == ".toml";
+  io::prepare_out_dir(a.out, a.force);
   std::string in, out;
   const io::Recording rec = load(a, in, out);
   std::optional<TempDir> tmp;
@@ -169,7 +171,6 @@ int run_diagnose(const DiagnoseArgs& a) {
   } catch (const std::invalid_argument& e) {
     bad(a.recording.string(), "", e.what());
   }
-  std::filesystem::create_directories(a.out);
   const diagnose::ReportContext ctx{a.recording.string(), a.model.string(), in, out};
   nlohmann::json doc = diagnose::report_json(r, ctx);
   doc["model_alignment_s"] = alignment_s;
@@ -221,24 +222,15 @@ void add_diagnose_command(CLI::App& app) {
       ->excludes(cmd->get_option("--input"))
       ->excludes(cmd->get_option("--output"));
   cmd->add_option("--dt", a->dt_s, "Sample period in s (overrides the time column and sidecar)");
-  cmd->add_option("--out", a->out, "Output folder")->required();
+  cmd->add_option("--out", a->out, "Output folder (must be new or empty, see --force)")->required();
+  cmd->add_flag("--force", a->force,
+                "Clear a non-empty --out folder first (an earlier run's files)");
   cmd->add_flag("--no-pairs", a->no_pairs, "Do not try pairs of effects");
   cmd->add_flag("--no-plant-check", a->no_plant_check,
                 "With a plant TOML: skip replaying the recording through the plants");
   cmd->add_flag("--json", a->json, "Print report.json on stdout instead of the summary");
   cmd->callback([a] {
-    int code = kExitUsage;
-    try {
-      code = run_diagnose(*a);
-    } catch (const io::InputError& e) {
-      fmt::print(stderr, "rig diagnose: {}\n", e.what());
-    } catch (const std::invalid_argument& e) {
-      fmt::print(stderr, "rig diagnose: {}\n", e.what());
-    } catch (const std::filesystem::filesystem_error& e) {
-      fmt::print(stderr, "rig diagnose: {}\n", e.what());
-    } catch (const std::runtime_error& e) {  // plantsim could not be started
-      fmt::print(stderr, "rig diagnose: {}\n", e.what());
-    }
+    const int code = run_diagnose(*a);
     if (code != kExitOk) throw CLI::RuntimeError(code);
   });
 }

@@ -14,6 +14,7 @@
 #include "rig/cli/commands.hpp"
 #include "rig/cli/identify_report.hpp"
 #include "rig/cli/identify_rows.hpp"
+#include "rig/io/out_dir.hpp"
 #include "rig/report/json_out.hpp"
 
 namespace rig::cli {
@@ -30,6 +31,7 @@ struct IdentifyArgs {
   std::string rows = "auto";  // auto | all | excitation (identify_rows.hpp)
   std::string out;
   bool json = false;
+  bool force = false;
 };
 
 constexpr Eigen::Index kMinSamples = 128;
@@ -49,7 +51,8 @@ std::optional<ident::ModelOrder> parse_order(const std::string& text) {
   const auto b = std::from_chars(m.data(), m.data() + m.size(), order.m);
   if (a.ec != std::errc() || a.ptr != n.data() + n.size() || b.ec != std::errc() ||
       b.ptr != m.data() + m.size() || order.n < 1 || order.m < 0 || order.m > order.n) {
-    bad_option("--order", "expected auto or n/m with n >= 1 and 0 <= m <= n, found \"" + text + "\"");
+    bad_option("--order",
+               "expected auto or n/m with n >= 1 and 0 <= m <= n, found \"" + text + "\"");
   }
   return order;
 }
@@ -58,7 +61,8 @@ std::optional<double> parse_delay(const std::string& text) {
   if (text == "auto") return std::nullopt;
   double v = 0.0;
   const auto r = std::from_chars(text.data(), text.data() + text.size(), v);
-  if (r.ec != std::errc() || r.ptr != text.data() + text.size() || !(v >= 0.0) || !std::isfinite(v)) {
+  if (r.ec != std::errc() || r.ptr != text.data() + text.size() || !(v >= 0.0) ||
+      !std::isfinite(v)) {
     bad_option("--delay", "expected auto or a dead time >= 0 in seconds, found \"" + text + "\"");
   }
   return v;
@@ -74,7 +78,8 @@ io::Recording load_recording(const IdentifyArgs& a, std::string& in, std::string
   out = a.output;
   if (!a.columns.empty()) {
     const auto comma = a.columns.find(',');
-    if (comma == std::string::npos) bad_option("--columns", "expected I,J (1-based input and output columns)");
+    if (comma == std::string::npos)
+      bad_option("--columns", "expected I,J (1-based input and output columns)");
     in = a.columns.substr(0, comma);
     out = a.columns.substr(comma + 1);
   }
@@ -94,9 +99,11 @@ io::Recording load_recording(const IdentifyArgs& a, std::string& in, std::string
     in = rec.names[0];
     out = rec.names[1];
   } else {
-    throw io::InputError(rec.source, 0, "", fmt::format("{} data columns and no u/y: name the "
-                                                        "input and output with --input/--output "
-                                                        "or --columns I,J", rec.names.size()));
+    throw io::InputError(rec.source, 0, "",
+                         fmt::format("{} data columns and no u/y: name the "
+                                     "input and output with --input/--output "
+                                     "or --columns I,J",
+                                     rec.names.size()));
   }
   return rec;
 }
@@ -104,9 +111,10 @@ io::Recording load_recording(const IdentifyArgs& a, std::string& in, std::string
 void require_excitation(const io::Recording& rec, const std::string& in, const Eigen::VectorXd& u) {
   const double sd = std::sqrt((u.array() - u.mean()).square().mean());
   if (!(sd > 1e-12 * std::max(1.0, std::abs(u.mean())))) {
-    throw io::InputError(rec.source, 0, in, fmt::format("expected a varying input, found the "
-                                                        "constant {:.6g}: nothing excites the plant",
-                                                        u.mean()));
+    throw io::InputError(rec.source, 0, in,
+                         fmt::format("expected a varying input, found the "
+                                     "constant {:.6g}: nothing excites the plant",
+                                     u.mean()));
   }
 }
 
@@ -118,9 +126,10 @@ signal::CorrelatorOptions correlator_options(const IdentifyArgs& a, const io::Re
   c.lags = a.lags > 0 ? a.lags : std::max<Eigen::Index>(16, std::min<Eigen::Index>(256, n / 8));
   if (a.skip < 1) bad_option("--skip", "expected an integer >= 1");
   if (4 * c.lags > n) {
-    throw io::InputError(rec.source, 0, "", fmt::format("expected at least {} samples for a lag "
-                                                        "window of {} (4 x --lags), found {}",
-                                                        4 * c.lags, c.lags, n));
+    throw io::InputError(rec.source, 0, "",
+                         fmt::format("expected at least {} samples for a lag "
+                                     "window of {} (4 x --lags), found {}",
+                                     4 * c.lags, c.lags, n));
   }
   return c;
 }
@@ -132,7 +141,8 @@ std::vector<ident::CoupledPair> coupled_pairs(const IdentifyArgs& a, const io::R
   std::vector<ident::CoupledPair> pairs;
   for (const std::string& name : rec.sidecar.coupled_columns) {
     const std::string suffix = "_ac";
-    if (name.size() <= suffix.size() || name.compare(name.size() - suffix.size(), suffix.size(), suffix) != 0) {
+    if (name.size() <= suffix.size() ||
+        name.compare(name.size() - suffix.size(), suffix.size(), suffix) != 0) {
       continue;
     }
     io::ReadOptions ro;
@@ -151,7 +161,8 @@ std::vector<ident::CoupledPair> coupled_pairs(const IdentifyArgs& a, const io::R
 }
 
 ident::QualityOptions quality_options(const io::Recording& rec, const signal::CorrelatorOptions& c,
-                                      const std::optional<ident::ModelOrder>& order, bool delay_auto) {
+                                      const std::optional<ident::ModelOrder>& order,
+                                      bool delay_auto) {
   ident::QualityOptions q;
   q.correlator = c;
   q.order = order.value_or(ident::ModelOrder{2, 0});
@@ -161,7 +172,8 @@ ident::QualityOptions quality_options(const io::Recording& rec, const signal::Co
   return q;
 }
 
-void emit(const IdentifyArgs& a, const nlohmann::json& rep, const std::string& summary, bool failed) {
+void emit(const IdentifyArgs& a, const nlohmann::json& rep, const std::string& summary,
+          bool failed) {
   if (a.json) {
     std::cout << rep.dump(2) << "\n";
   } else {
@@ -170,15 +182,17 @@ void emit(const IdentifyArgs& a, const nlohmann::json& rep, const std::string& s
 }
 
 int run_identify(const IdentifyArgs& a) {
+  io::prepare_out_dir(a.out, a.force);
   IdentifyContext ctx;
   std::string in, out;
   const io::Recording whole = load_recording(a, in, out);
   ctx.rows = select_rows(a.recording, whole, a.rows);
   const io::Recording rec = slice_rows(whole, ctx.rows);
   if (rec.rows() < kMinSamples) {
-    throw io::InputError(rec.source, 0, "", fmt::format("expected at least {} rows, the selection "
-                                                        "({}) holds {}", kMinSamples,
-                                                        ctx.rows.reason, rec.rows()));
+    throw io::InputError(rec.source, 0, "",
+                         fmt::format("expected at least {} rows, the selection "
+                                     "({}) holds {}",
+                                     kMinSamples, ctx.rows.reason, rec.rows()));
   }
   ctx.recording = &rec;
   ctx.input = in;
@@ -196,7 +210,6 @@ int run_identify(const IdentifyArgs& a) {
   ident::QualityOptions qo = quality_options(rec, ctx.correlator, order, !delay);
   qo.coupled_pairs = coupled_pairs(a, rec, ctx.rows);
   const ident::QualityReport quality = ident::check_quality(u, y, rec.dt_s, qo);
-  std::filesystem::create_directories(a.out);
   const std::filesystem::path dir(a.out);
   if (quality.has_fatal()) {
     const Eigen::VectorXd uc = u.array() - u.mean(), yc = y.array() - y.mean();
@@ -228,42 +241,39 @@ int run_identify(const IdentifyArgs& a) {
 void add_identify_command(CLI::App& app) {
   auto a = std::make_shared<IdentifyArgs>();
   CLI::App* cmd = app.add_subcommand(
-      "identify", "Identify a transfer function from a recording (data-quality checks, "
-                  "MMFM or SRIVC, order and delay selection); writes model.json, report.json, "
-                  "report.html");
+      "identify",
+      "Identify a transfer function from a recording (data-quality checks, "
+      "MMFM or SRIVC, order and delay selection); writes model.json, report.json, "
+      "report.html");
   cmd->add_option("--recording", a->recording, "Recording: CSV with header, or .dat without")
       ->required();
   cmd->add_option("--input", a->input, "Input column name (default u, or the first of two)");
   cmd->add_option("--output", a->output, "Output column name (default y, or the second of two)");
   cmd->add_option("--columns", a->columns, "Input and output columns by 1-based index: I,J")
-      ->excludes(cmd->get_option("--input"))->excludes(cmd->get_option("--output"));
+      ->excludes(cmd->get_option("--input"))
+      ->excludes(cmd->get_option("--output"));
   cmd->add_option("--dt", a->dt_s, "Sample period in s (overrides the time column and sidecar)");
   cmd->add_option("--order", a->order, "Model order n/m (den/num), or auto")->default_str("auto");
   cmd->add_option("--delay", a->delay, "Dead time in s, or auto")->default_str("auto");
   cmd->add_option("--method", a->method, "Estimator")
-      ->check(CLI::IsMember({"mmfm", "srivc"}))->default_str("mmfm");
+      ->check(CLI::IsMember({"mmfm", "srivc"}))
+      ->default_str("mmfm");
   cmd->add_option("--lags", a->lags, "Correlation lag window in samples (default min(256, N/8))");
   cmd->add_option("--skip", a->skip, "Fell's skip: form every S-th product")->default_str("1");
   cmd->add_option("--estimation-fraction", a->estimation_fraction,
                   "Share of the record used for estimation; the rest validates")
-      ->check(CLI::Range(0.2, 0.8))->default_str("0.5");
+      ->check(CLI::Range(0.2, 0.8))
+      ->default_str("0.5");
   cmd->add_option("--rows", a->rows,
                   "Rows to use: auto (a rig commission recording's excitation phase, else all), "
                   "all, or excitation")
       ->default_str("auto");
-  cmd->add_option("--out", a->out, "Output folder")->required();
+  cmd->add_option("--out", a->out, "Output folder (must be new or empty, see --force)")->required();
+  cmd->add_flag("--force", a->force,
+                "Clear a non-empty --out folder first (an earlier run's files)");
   cmd->add_flag("--json", a->json, "Print report.json on stdout instead of the summary");
   cmd->callback([a] {
-    int code = kExitUsage;
-    try {
-      code = run_identify(*a);
-    } catch (const io::InputError& e) {
-      fmt::print(stderr, "rig identify: {}\n", e.what());
-    } catch (const std::invalid_argument& e) {
-      fmt::print(stderr, "rig identify: {}\n", e.what());
-    } catch (const std::filesystem::filesystem_error& e) {
-      fmt::print(stderr, "rig identify: {}\n", e.what());
-    }
+    const int code = run_identify(*a);
     if (code != kExitOk) throw CLI::RuntimeError(code);
   });
 }

@@ -8,6 +8,7 @@
 #include <cmath>
 #include <memory>
 
+#include "rig/io/out_dir.hpp"
 #include "rig/session/emulator.hpp"
 #include "rig/session/session.hpp"
 #include "rig/session/session_outputs.hpp"
@@ -36,9 +37,10 @@ void print_summary(const session::SessionData& d, const std::filesystem::path& o
   fmt::print("rig {}: {}\n", d.command, d.outcome);
   if (d.mmfm && d.mmfm->derived.valid) {
     const auto& g = d.mmfm->derived;
-    fmt::print("  MMFM: K {:.2f}+-{:.2f} kW/%  fn {:.3f}+-{:.3f} Hz  zeta {:.3f}+-{:.3f}  "
-               "Td {:.1f} ms\n",
-               g.gain, g.gain_std, g.fn_hz, g.fn_hz_std, g.zeta, g.zeta_std, 1e3 * d.mmfm->delay_s);
+    fmt::print(
+        "  MMFM: K {:.2f}+-{:.2f} kW/%  fn {:.3f}+-{:.3f} Hz  zeta {:.3f}+-{:.3f}  "
+        "Td {:.1f} ms\n",
+        g.gain, g.gain_std, g.fn_hz, g.fn_hz_std, g.zeta, g.zeta_std, 1e3 * d.mmfm->delay_s);
   }
   if (d.compare_sweep) fmt::print("  vs swept sine: {}\n", d.compare_sweep->summary);
   if (d.compare_h1) fmt::print("  vs H1: {}\n", d.compare_h1->summary);
@@ -50,9 +52,8 @@ void print_summary(const session::SessionData& d, const std::filesystem::path& o
 }  // namespace
 
 session::TestConfig load_config(const SessionArgs& args, const std::string& /*command*/) {
-  session::TestConfig c = args.test_file.empty()
-                              ? session::parse_test_toml("", "<defaults>")
-                              : session::load_test_file(args.test_file);
+  session::TestConfig c = args.test_file.empty() ? session::parse_test_toml("", "<defaults>")
+                                                 : session::load_test_file(args.test_file);
   if (args.emulate) {
     if (args.link_type != "modbus+tcp" && args.link_type != "can+udp" &&
         args.link_type != "modbus+rtu") {
@@ -64,7 +65,8 @@ session::TestConfig load_config(const SessionArgs& args, const std::string& /*co
       if (c.link.lockstep_ticks > 0) {
         throw session::ConfigError(fmt::format(
             "--clock realtime: {} sets link.lockstep_ticks = {}; remove it or use --clock "
-            "lockstep", c.source, c.link.lockstep_ticks));
+            "lockstep",
+            c.source, c.link.lockstep_ticks));
       }
     } else {
       if (c.link.lockstep_ticks == 0) {
@@ -79,18 +81,18 @@ session::TestConfig load_config(const SessionArgs& args, const std::string& /*co
     if (c.plant.preset.empty()) c.plant.preset = args.preset;
     session::validate(c);
   } else if (!args.clock.empty()) {
-    throw session::ConfigError("--clock: only with --emulate (a governor link runs in real "
-                               "time unless link.lockstep_ticks > 0)");
-  } else if (args.link.empty() && c.link.uri.empty()) {
     throw session::ConfigError(
-        "no link: give --link URI, link.uri in the test file, or --emulate");
+        "--clock: only with --emulate (a governor link runs in real "
+        "time unless link.lockstep_ticks > 0)");
+  } else if (args.link.empty() && c.link.uri.empty()) {
+    throw session::ConfigError("no link: give --link URI, link.uri in the test file, or --emulate");
   }
   return c;
 }
 
 int run_session(const SessionArgs& args, session::TestConfig config, const std::string& command) {
   install_abort_handler();
-  std::filesystem::create_directories(args.out_dir);
+  io::prepare_out_dir(args.out_dir, args.force);  // before plantsim or the governor
   std::unique_ptr<session::EmulatedPlant> plant;
   session::SessionOptions o;
   o.out_dir = args.out_dir;
@@ -111,7 +113,7 @@ int run_session(const SessionArgs& args, session::TestConfig config, const std::
       plant = std::make_unique<session::EmulatedPlant>(e);
     } catch (const session::EmulatorError& ex) {
       fmt::print(stderr, "rig {}: {}\n", command, ex.what());
-      return session::kExitFault;
+      return kExitLinkFault;
     }
     o.link_uri = plant->link_uri();
     o.preset = args.preset;

@@ -24,6 +24,7 @@ struct SessionArgs {
   std::vector<std::string> faults;
   bool json = false;
   bool quiet = false;
+  bool force = false;  // clear a non-empty --out first
 };
 
 // Loads the test file (or the defaults), applies the emulated-plant settings, checks that a

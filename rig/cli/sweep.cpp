@@ -1,8 +1,8 @@
 // `rig sweep`: a swept-sine frequency response on its own (DESIGN.md section 4). The same
 // steady-state check, pilot and supervisor as `rig commission` guard it.
-#include <CLI/CLI.hpp>
 #include <fmt/format.h>
 
+#include <CLI/CLI.hpp>
 #include <memory>
 #include <optional>
 
@@ -30,18 +30,13 @@ void add_sweep_command(CLI::App& app) {
   cmd->add_option("--to", args->to_hz, "Highest frequency, Hz");
   cmd->add_option("--points", args->points, "Log-spaced frequencies");
   cmd->callback([args] {
-    int code = session::kExitConfig;
-    try {
-      session::TestConfig c = load_config(args->session, "sweep");
-      if (args->from_hz) c.sweep.from_hz = *args->from_hz;
-      if (args->to_hz) c.sweep.to_hz = *args->to_hz;
-      if (args->points) c.sweep.points = *args->points;
-      c.sweep.enabled = true;
-      session::validate(c);
-      code = run_session(args->session, c, "sweep");
-    } catch (const session::ConfigError& e) {
-      fmt::print(stderr, "rig sweep: {}\n", e.what());
-    }
+    session::TestConfig c = load_config(args->session, "sweep");
+    if (args->from_hz) c.sweep.from_hz = *args->from_hz;
+    if (args->to_hz) c.sweep.to_hz = *args->to_hz;
+    if (args->points) c.sweep.points = *args->points;
+    c.sweep.enabled = true;
+    session::validate(c);
+    const int code = run_session(args->session, c, "sweep");
     if (code != 0) throw CLI::RuntimeError(code);
   });
 }

@@ -1,10 +1,10 @@
 #include "rig/io/recording_writer.hpp"
 
 #include <fcntl.h>
+#include <fmt/format.h>
 #include <unistd.h>
 
-#include <fmt/format.h>
-
+#include <algorithm>
 #include <cerrno>
 #include <cstring>
 #include <stdexcept>
@@ -80,7 +80,9 @@ void RecordingWriter::flush() {
   if (!error_.empty()) throw InputError(path_.string(), 0, "", error_);
 }
 
-// The buffer always ends at a line end, so each write(2) hands over whole rows.
+// The buffer always ends at a line end, so each write(2) hands over whole rows. When the
+// disk fills in the middle of a row, the file is cut back to the last whole row, so that the
+// recording stays readable (DESIGN.md section 8).
 void RecordingWriter::flush_locked() {
   if (fd_ < 0 || buffer_.empty() || !error_.empty()) return;
   std::size_t done = 0;
@@ -88,11 +90,24 @@ void RecordingWriter::flush_locked() {
     const ssize_t n = ::write(fd_, buffer_.data() + done, buffer_.size() - done);
     if (n < 0 && errno == EINTR) continue;
     if (n <= 0) {
-      error_ = std::string("write failed: ") + std::strerror(errno);
+      error_ = std::string("write failed: ") + std::strerror(n < 0 ? errno : ENOSPC);
+      const std::size_t whole = done == 0 ? 0 : buffer_.rfind('\n', done - 1);
+      const off_t keep =
+          committed_bytes_ +
+          (whole == std::string::npos || done == 0 ? 0 : static_cast<off_t>(whole + 1));
+      if (::ftruncate(fd_, keep) == 0) {
+        committed_bytes_ = keep;
+        if (done > 0 && whole != std::string::npos) {
+          lines_written_ += static_cast<std::size_t>(
+              std::count(buffer_.begin(), buffer_.begin() + static_cast<long>(whole + 1), '\n'));
+        }
+      }
       return;
     }
     done += std::size_t(n);
   }
+  committed_bytes_ += static_cast<off_t>(done);
+  lines_written_ += static_cast<std::size_t>(std::count(buffer_.begin(), buffer_.end(), '\n'));
   buffer_.clear();
   if (options_.sync_to_disk) ::fdatasync(fd_);
 }
@@ -118,7 +133,8 @@ void RecordingWriter::close() {
   ::close(fd_);
   fd_ = -1;
   if (options_.write_sidecar) {
-    sidecar_.raw["rows"] = rows_;
+    // The rows the file holds: fewer than appended when the disk filled.
+    sidecar_.raw["rows"] = lines_written_ > 0 ? lines_written_ - 1 : 0;
     sidecar_.raw["complete"] = error_.empty();
     write_sidecar(sidecar_path(path_), sidecar_);
   }

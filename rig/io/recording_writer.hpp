@@ -12,6 +12,8 @@
 // "rows" and "complete": true, so a reader can tell a finished recording from a cut one.
 #pragma once
 
+#include <sys/types.h>
+
 #include <chrono>
 #include <condition_variable>
 #include <cstddef>
@@ -37,8 +39,8 @@ struct RecordingWriterOptions {
 class RecordingWriter {
  public:
   // Creates (truncates) `csv` and writes the header. InputError when it cannot.
-  RecordingWriter(std::filesystem::path csv, std::vector<std::string> columns,
-                  Sidecar sidecar = {}, RecordingWriterOptions options = {});
+  RecordingWriter(std::filesystem::path csv, std::vector<std::string> columns, Sidecar sidecar = {},
+                  RecordingWriterOptions options = {});
   ~RecordingWriter();
   RecordingWriter(const RecordingWriter&) = delete;
   RecordingWriter& operator=(const RecordingWriter&) = delete;
@@ -66,7 +68,9 @@ class RecordingWriter {
   int fd_ = -1;
   std::string buffer_;
   std::size_t rows_ = 0;
-  std::string error_;  // first write error, reported by the next append/flush
+  off_t committed_bytes_ = 0;      // file length at the last whole row handed to the kernel
+  std::size_t lines_written_ = 0;  // whole lines in the file (header included)
+  std::string error_;              // first write error, reported by the next append/flush
   mutable std::mutex mutex_;
   std::condition_variable wake_;
   bool stopping_ = false;

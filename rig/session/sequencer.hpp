@@ -2,7 +2,9 @@
 // Internal to rig/session: the CLI calls run_commission().
 #pragma once
 
+#include <chrono>
 #include <functional>
+#include <future>
 #include <memory>
 #include <optional>
 #include <vector>
@@ -32,6 +34,21 @@ class Sequencer {
   TickLoop& loop() { return loop_; }
 
  private:
+  // Runs phase-change work (estimates, plans) off the loop thread in real time, holding the
+  // baseline with a write and a read every period meanwhile, so that neither the heartbeat
+  // nor the sample stream stalls; inline in lockstep (a seed gives the same recording).
+  template <class Fn>
+  auto off_loop(Fn fn) -> decltype(fn()) {
+    if (data_.config.link.lockstep_ticks > 0) return fn();
+    auto done = std::async(std::launch::async, std::move(fn));
+    while (done.wait_for(std::chrono::seconds(0)) != std::future_status::ready) loop_.prime();
+    return done.get();
+  }
+  // Excitation over: final estimate, H1, the applied level and the data-quality checks.
+  void analyse_excitation(OnlineMmfm& online);
+  // False (exit 1, outcome set) when the applied excitation or the data do not support a model.
+  bool excitation_supports_model();
+  void check_excitation_quality(const Eigen::VectorXd& u, const Eigen::VectorXd& y);
   // peak_to_rms: 4 for noise excitation, 2 for a sine (supervisor.hpp).
   SupervisorConfig supervisor_config(double peak_to_rms = 4.0) const;
   // Runs a supervised phase: request(k) for k < samples (nullopt ends early), then the
@@ -49,7 +66,10 @@ class Sequencer {
   LiveView& view_;
   TickLoop loop_;
   double p0_kw_ = 0.0;
-  double resonance_hz_ = 2.0;  // dominant mode, updated from the MMFM model
+  bool activated_ = false;          // enable was written (finish() must clear it)
+  bool bias_acknowledged_ = false;  // the governor reported the bias active (layer 0 on)
+  PlausibilityCheck plausible_;
+  double resonance_hz_ = 2.0;          // dominant mode, updated from the MMFM model
   std::vector<double> exc_u_, exc_y_;  // excitation phase: applied u and P - P0
   std::vector<double> pilot_u_, pilot_y_;
   ident::TransferFunction prior_from_pilot();

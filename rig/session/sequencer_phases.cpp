@@ -3,11 +3,14 @@
 
 #include <algorithm>
 #include <cmath>
+#include <thread>
 
 #include "rig/fra/h1.hpp"
 #include "rig/fra/stepped_sine.hpp"
 #include "rig/ident/identify.hpp"
+#include "rig/ident/quality.hpp"
 #include "rig/session/sequencer.hpp"
+#include "rig/signal/ac_coupling.hpp"
 #include "rig/signal/excitation.hpp"
 
 namespace rig::session {
@@ -44,7 +47,8 @@ signal::CorrelatorKind correlator_kind(const std::string& name) {
 // Raised-cosine fade from 1 to 0 over n samples: the excitation ends without a step, which a
 // lightly damped mode would answer with an overshoot of up to 1 + exp(-pi zeta / sqrt(1-zeta^2)).
 double fade_out(long j, long n) {
-  return j >= n ? 0.0 : 0.5 * (1.0 + std::cos(M_PI * static_cast<double>(j) / static_cast<double>(n)));
+  return j >= n ? 0.0
+                : 0.5 * (1.0 + std::cos(M_PI * static_cast<double>(j) / static_cast<double>(n)));
 }
 
 // Samples the supervisor's soft start takes to reach full scale.
@@ -103,16 +107,17 @@ bool Sequencer::pilot() {
   limits.plan_fraction = c.safety.plan_fraction;
   limits.clamp_pct = c.safety.clamp_pct;
   limits.noise_std_kw = data_.steady->noise_pct / 100.0 * p0_kw_;
-  data_.pilot = analyse_pilot(u, y, limits);
+  data_.pilot = off_loop([&] { return analyse_pilot(u, y, limits); });
   pilot_u_ = u;
   pilot_y_ = y;
   if (!data_.pilot->ok) {
-    fail(kExitFault, data_.pilot->reason);
+    fail(kExitLinkFault, data_.pilot->reason);
     return false;
   }
   data_.excitation_sigma_pct = data_.pilot->planned_std_pct;
   view_.message(fmt::format(
-      "pilot: gain {:.1f} kW/%, planned excitation std {:.3f} % (predicted peak {:.1f} of {:.1f} kW){}",
+      "pilot: gain {:.1f} kW/%, planned excitation std {:.3f} % (predicted peak {:.1f} of {:.1f} "
+      "kW){}",
       data_.pilot->gain_kw_per_pct, data_.pilot->planned_std_pct, data_.pilot->predicted_peak_kw,
       limits.band_kw, data_.pilot->limited_by_clamp ? ", limited by the clamp" : ""));
   return true;
@@ -192,8 +197,20 @@ bool Sequencer::excite() {
           }
         }
       });
-  online.finish();
   loop_.status().estimates.clear();
+  off_loop([&] { analyse_excitation(online); });
+  if (ok)
+    view_.message(fmt::format(
+        "excitation: {:.0f} s, applied std {:.3f} % of {:.3f} % "
+        "planned, stopped: {}",
+        data_.excitation_s, data_.applied_std_pct, data_.excitation_sigma_pct, data_.stop_reason));
+  return ok && excitation_supports_model();
+}
+
+void Sequencer::analyse_excitation(OnlineMmfm& online) {
+  const TestConfig& c = data_.config;
+  const double rate = c.link.sample_rate_hz;
+  online.finish();
   data_.excitation_s = static_cast<double>(exc_u_.size()) / rate;
   data_.history = online.history();
   for (auto& h : data_.history) h.delay_s += timing_correction_s();
@@ -223,9 +240,66 @@ bool Sequencer::excite() {
                                 1.0 / rate, w);
     correct_timing(data_.h1);
   }
-  if (ok) view_.message(fmt::format("excitation: {:.0f} s, stopped: {}", data_.excitation_s,
-                                    data_.stop_reason));
-  return ok;
+  const Eigen::Map<const Eigen::VectorXd> u(exc_u_.data(),
+                                            static_cast<Eigen::Index>(exc_u_.size()));
+  const Eigen::Map<const Eigen::VectorXd> y(exc_y_.data(),
+                                            static_cast<Eigen::Index>(exc_y_.size()));
+  if (u.size() > 1) {
+    data_.applied_std_pct =
+        std::sqrt((u.array() - u.mean()).square().sum() / static_cast<double>(u.size() - 1));
+  }
+  check_excitation_quality(u, y);
+}
+
+// The pre-estimation checks of rig/ident/quality on the excitation record, after the same
+// matched AC coupling the online estimate used. Fatal findings mean no model.
+void Sequencer::check_excitation_quality(const Eigen::VectorXd& u, const Eigen::VectorXd& y) {
+  const TestConfig& c = data_.config;
+  ident::QualityOptions q;
+  q.correlator.lags = c.mmfm.lags;
+  q.correlator.skip = c.mmfm.skip;
+  q.order = {c.mmfm.order_n, c.mmfm.order_m};
+  q.delay_estimated = !c.mmfm.delay_s.has_value();
+  const double dt_s = 1.0 / c.link.sample_rate_hz;
+  if (u.size() <= 4 * c.mmfm.lags) {
+    data_.quality_flags.push_back("excitation record shorter than four correlation windows");
+    return;
+  }
+  try {
+    const double rc = c.excitation.ac_coupling_rc_s;
+    const Eigen::VectorXd uc = rc > 0.0 ? signal::ac_couple(u, dt_s, rc) : Eigen::VectorXd(u);
+    const Eigen::VectorXd yc = rc > 0.0 ? signal::ac_couple(y, dt_s, rc) : Eigen::VectorXd(y);
+    const ident::QualityReport report = ident::check_quality(uc, yc, dt_s, q);
+    for (const auto& f : report.flags) {
+      if (f.severity == ident::Severity::kFatal)
+        data_.quality_flags.push_back(f.name + ": " + f.message);
+    }
+  } catch (const std::exception& e) {
+    data_.quality_flags.push_back(std::string("data-quality check failed: ") + e.what());
+  }
+}
+
+bool Sequencer::excitation_supports_model() {
+  const TestConfig& c = data_.config;
+  const double planned = data_.excitation_sigma_pct;
+  const double share = planned > 0.0 ? data_.applied_std_pct / planned : 0.0;
+  std::string why;
+  if (share < c.mmfm.min_applied_fraction) {
+    why = fmt::format(
+        "the applied excitation (std {:.4f} %) was {:.0f} % of the planned {:.4f} % "
+        "(mmfm.min_applied_fraction = {:g}): the supervisor held it back",
+        data_.applied_std_pct, 100.0 * share, planned, c.mmfm.min_applied_fraction);
+  } else if (!data_.quality_flags.empty()) {
+    why = "the excitation data fail a quality check: " + data_.quality_flags.front();
+  } else if (!data_.mmfm) {
+    why = "the MMFM estimate failed: " + data_.mmfm_error;
+  } else if (!data_.mmfm->model.is_stable()) {
+    why = "the MMFM model is unstable";
+  }
+  if (why.empty()) return true;
+  data_.model_rejected = why;
+  fail(kExitAcceptance, "no model: " + why);
+  return false;
 }
 
 // Largest sine amplitude whose sudden stop (a trip, or the step from one point to the next,
@@ -241,8 +315,8 @@ double Sequencer::step_safe_amplitude_pct(const ident::TransferFunction& prior,
   }
   const double band_kw = data_.config.safety.band_pct / 100.0 * p0_kw_;
   if (!(gain > 0.0) || !std::isfinite(gain)) return data_.config.safety.clamp_pct;
-  const double fraction = std::min(data_.config.safety.plan_fraction,
-                                   0.9 * supervisor_config().backoff.start_fraction);
+  const double fraction =
+      std::min(data_.config.safety.plan_fraction, 0.9 * supervisor_config().backoff.start_fraction);
   return fraction * band_kw / (gain * (1.0 + overshoot));
 }
 
@@ -278,10 +352,16 @@ bool Sequencer::sweep() {
   p.amplitude.noise_peak_kw = 3.0 * data_.steady->noise_pct / 100.0 * p0_kw_;
   p.amplitude.max_amplitude_pct = std::min(c.safety.clamp_pct, step_safe_amplitude_pct(prior, d));
   fra::SweepPlan plan;
-  try {
-    plan = fra::make_sweep_plan(p, fra::as_response_fn(prior));
-  } catch (const std::exception& ex) {
-    loop_.event("warning", std::string("swept sine skipped: ") + ex.what());
+  std::string plan_error;
+  off_loop([&] {
+    try {
+      plan = fra::make_sweep_plan(p, fra::as_response_fn(prior));
+    } catch (const std::exception& ex) {
+      plan_error = ex.what();
+    }
+  });
+  if (!plan_error.empty()) {
+    loop_.event("warning", "swept sine skipped: " + plan_error);
     return true;
   }
   fra::SteppedSineAnalyser analyser(plan);
@@ -330,9 +410,9 @@ ident::TransferFunction Sequencer::prior_from_pilot() {
     ident::IdentifyOptions o;
     o.order = ident::ModelOrder{2, 0};
     o.correlator.lags = data_.config.mmfm.lags;
-    const auto r = ident::identify(Eigen::Map<const Eigen::VectorXd>(pilot_u_.data(), pilot_u_.size()),
-                                   Eigen::Map<const Eigen::VectorXd>(pilot_y_.data(), pilot_y_.size()),
-                                   dt_s, o);
+    const auto r = ident::identify(
+        Eigen::Map<const Eigen::VectorXd>(pilot_u_.data(), pilot_u_.size()),
+        Eigen::Map<const Eigen::VectorXd>(pilot_y_.data(), pilot_y_.size()), dt_s, o);
     if (r.model.is_stable()) return r.model;
   } catch (const std::exception& ex) {
     loop_.event("warning", std::string("pilot model failed, flat prior used: ") + ex.what());
@@ -354,7 +434,7 @@ void Sequencer::compare() {
   tol.min_coherence = c.compare.min_coherence;
   if (!data_.sweep.empty()) data_.compare_sweep = fra::compare(data_.mmfm->model, data_.sweep, tol);
   if (!data_.h1.empty()) data_.compare_h1 = fra::compare(data_.mmfm->model, data_.h1, tol);
-  if (data_.exit_code == kExitPass && c.sweep.enabled) {
+  if (data_.exit_code == kExitOk && c.sweep.enabled) {
     if (!data_.compare_sweep || data_.compare_sweep->verdict != fra::Verdict::kPass) {
       data_.exit_code = kExitAcceptance;
       data_.outcome = "acceptance check failed: " +
@@ -364,9 +444,39 @@ void Sequencer::compare() {
   }
 }
 
+// Bounded: the governor's heartbeat rule has dropped the bias within 0.5 s anyway; these tries
+// clear the enable and the held bias so that no later heartbeat writer re-applies them.
+constexpr int kRampDownReconnects = 5;
+constexpr auto kReconnectWait = std::chrono::milliseconds(400);
+
 void Sequencer::finish() {
-  if (auto d = link_.deactivate(); !d) {
-    loop_.event("link", "deactivate: " + d.error().message());
+  RampDownResult& rd = data_.ramp_down;
+  if (!activated_) {  // nothing was ever enabled
+    link_.close();
+    return;
+  }
+  rd.attempted = true;
+  drivers::LinkResult<void> d = link_.deactivate();
+  for (int attempt = 1; !d && attempt <= kRampDownReconnects; ++attempt) {
+    loop_.event("link", fmt::format("ramp-down failed ({}); reconnecting, try {} of {}",
+                                    d.error().message(), attempt, kRampDownReconnects));
+    if (data_.config.link.lockstep_ticks == 0) std::this_thread::sleep_for(kReconnectWait);
+    if (auto c = link_.configure(); !c) {
+      d = c.error();
+      continue;
+    }
+    ++rd.reconnects;
+    d = link_.deactivate();
+  }
+  rd.cleared = d.has_value();
+  if (!rd.cleared) {
+    rd.error = d.error().message();
+    loop_.event("link", "could not ramp down and clear the enable: " + rd.error +
+                            " (the governor's heartbeat rule removes the bias)");
+  } else if (rd.reconnects > 0) {
+    loop_.event("link", fmt::format("reconnected ({}x), bias ramped to baseline and enable "
+                                    "cleared",
+                                    rd.reconnects));
   }
   link_.close();
 }

@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include <chrono>
+#include <optional>
 
 #include "drivers/open_link.hpp"
 #include "rig/io/recording_writer.hpp"
@@ -41,31 +42,41 @@ io::Sidecar recording_sidecar(const SessionData& d) {
   return s;
 }
 
-// Phases in order; each returns false when the test must stop.
-void run_phases(Sequencer& seq, bool sweep_only) {
-  if (!seq.steady_state() || !seq.activate()) return;
-  if (!seq.pilot()) return;
+// Phases in order; each returns false when the test must stop. True when the comparison is
+// due (after the ramp-down: nothing is written to the governor while it runs).
+bool run_phases(Sequencer& seq, bool sweep_only) {
+  if (!seq.steady_state() || !seq.activate()) return false;
+  if (!seq.pilot()) return false;
   if (sweep_only) {
     seq.sweep();
-    return;
+    return false;
   }
-  if (!seq.excite()) return;
-  if (!seq.sweep()) return;
-  seq.compare();
+  if (!seq.excite()) return false;
+  return seq.sweep();
 }
 
-}  // namespace
-
-SessionData run_commission(const TestConfig& config, const SessionOptions& options) {
-  const auto wall_start = std::chrono::steady_clock::now();
+SessionData new_session_data(const TestConfig& config, const SessionOptions& options) {
   SessionData data;
   data.config = config;
   data.command = options.command;
   data.link_uri = options.link_uri.empty() ? config.link.uri : options.link_uri;
   data.preset = options.preset.empty() ? config.plant.preset : options.preset;
   data.plant_seed = options.plant_seed;
-  std::filesystem::create_directories(options.out_dir);
+  return data;
+}
 
+// Outputs of a run; a report that cannot be written is a failure of the rig (exit 4).
+void finish_outputs(SessionData& data, const std::filesystem::path& out) {
+  if (!write_outputs(data, out) && data.exit_code != kExitSafety) {
+    data.exit_code = kExitSafety;
+    data.outcome = "rig failure: the report could not be written into " + out.string();
+  }
+}
+
+}  // namespace
+
+SessionData run_commission(const TestConfig& config, const SessionOptions& options) {
+  SessionData data = new_session_data(config, options);
   drivers::LinkOptions lo;
   lo.response_timeout = std::chrono::milliseconds(static_cast<long>(config.link.timeout_s * 1000));
   lo.lockstep = config.link.lockstep_ticks > 0;
@@ -73,32 +84,56 @@ SessionData run_commission(const TestConfig& config, const SessionOptions& optio
   auto opened = drivers::open_link(data.link_uri, lo);
   if (!opened) {
     const bool config_error = opened.error().kind == drivers::LinkErrorKind::kConfig;
-    data.exit_code = config_error ? kExitConfig : kExitFault;
+    data.exit_code = config_error ? kExitUsage : kExitLinkFault;
     data.outcome = "cannot open the link: " + opened.error().message();
-    write_outputs(data, options.out_dir);
+    finish_outputs(data, options.out_dir);
     return data;
   }
-  std::unique_ptr<drivers::GovernorLink> link = std::move(opened.value());
-  if (auto c = link->configure(); !c) {
-    data.exit_code = kExitFault;
+  return run_commission(config, options, *opened.value());
+}
+
+SessionData run_commission(const TestConfig& config, const SessionOptions& options,
+                           drivers::GovernorLink& link) {
+  const auto wall_start = std::chrono::steady_clock::now();
+  SessionData data = new_session_data(config, options);
+  if (data.link_uri.empty()) data.link_uri = link.uri();
+  if (auto c = link.configure(); !c) {
+    data.exit_code = kExitLinkFault;
     data.outcome = "cannot configure the link: " + c.error().message();
-    write_outputs(data, options.out_dir);
+    finish_outputs(data, options.out_dir);
     return data;
   }
   io::RecordingWriterOptions wo;
   wo.flush_period =
       std::chrono::milliseconds(static_cast<long>(config.output.flush_interval_s * 1000));
   wo.sync_to_disk = false;  // flushed to the kernel: survives a kill -9 of the rig
-  io::RecordingWriter recorder(options.out_dir / "recording.csv", recording_columns(),
-                               recording_sidecar(data), wo);
+  std::optional<io::RecordingWriter> recorder;
+  try {
+    recorder.emplace(options.out_dir / "recording.csv", recording_columns(),
+                     recording_sidecar(data), wo);
+  } catch (const std::exception& e) {  // nothing was written to the governor yet
+    link.close();
+    data.exit_code = kExitSafety;
+    data.outcome = std::string("rig failure: cannot create the recording: ") + e.what();
+    finish_outputs(data, options.out_dir);
+    return data;
+  }
   // At most 10 refreshes (terminal) or one plain line per wall-clock second.
   const bool tty = LiveView::is_terminal(options.live_out);
   LiveView view(options.live_out, tty, config.output.live_interval_s, tty ? 0.1 : 1.0);
-  Sequencer seq(data, *link, recorder, view, options);
-  run_phases(seq, options.command == "sweep");
-  seq.finish();
+  Sequencer seq(data, link, *recorder, view, options);
+  const bool compare_due = run_phases(seq, options.command == "sweep");
+  seq.finish();  // ramp-down and enable cleared, whatever happened
+  if (compare_due) seq.compare();
   view.finish();
-  recorder.close();
+  try {
+    recorder->close();
+  } catch (const std::exception& e) {
+    if (data.exit_code != kExitSafety) {
+      data.exit_code = kExitSafety;
+      data.outcome = std::string("rig failure: cannot write the recording: ") + e.what();
+    }
+  }
   data.events = seq.loop().events();
   data.trace = seq.loop().trace();
   data.max_abs_deviation_pct = seq.loop().max_abs_deviation_pct();
@@ -111,7 +146,7 @@ SessionData run_commission(const TestConfig& config, const SessionOptions& optio
                    : data.compare_sweep    ? data.compare_sweep->summary
                                            : std::string("test complete (no swept-sine check)");
   }
-  write_outputs(data, options.out_dir);
+  finish_outputs(data, options.out_dir);
   return data;
 }
 

@@ -21,6 +21,7 @@
 #include "rig/fra/compare.hpp"
 #include "rig/fra/frf.hpp"
 #include "rig/ident/mmfm.hpp"
+#include "rig/io/exit_code.hpp"
 #include "rig/session/online_mmfm.hpp"
 #include "rig/session/pilot.hpp"
 #include "rig/session/steady_state.hpp"
@@ -30,14 +31,6 @@
 
 namespace rig::session {
 
-enum ExitCode : int {
-  kExitPass = 0,
-  kExitAcceptance = 1,
-  kExitConfig = 2,
-  kExitFault = 3,
-  kExitSafety = 4,
-};
-
 struct SessionOptions {
   std::filesystem::path out_dir;
   std::string link_uri;  // overrides config.link.uri when set
@@ -46,6 +39,14 @@ struct SessionOptions {
   std::string command = "commission";        // "commission" or "sweep"
   std::FILE* live_out = stderr;              // live view (nullptr: silent)
   const std::atomic<bool>* abort = nullptr;  // set by the SIGINT handler
+};
+
+// The ramp-down at the end of a test or after a trip (DESIGN.md section 8, layer 3).
+struct RampDownResult {
+  bool attempted = false;  // the external bias had been enabled
+  bool cleared = false;    // bias ramped to baseline and enable cleared, acknowledged
+  int reconnects = 0;      // reconnections it took
+  std::string error;       // why it could not, when !cleared
 };
 
 // Everything the report is made of.
@@ -59,6 +60,10 @@ struct SessionData {
   std::optional<PilotResult> pilot;
   double excitation_sigma_pct = 0.0;
   double excitation_s = 0.0;
+  double applied_std_pct = 0.0;  // measured std of u over the excitation (after supervisor)
+  std::vector<std::string> quality_flags;  // fatal data-quality findings on the excitation
+  std::string model_rejected;  // why the data do not support a model (then none is written)
+  RampDownResult ramp_down;
   std::string stop_reason;  // why the excitation stopped
   std::vector<BlockEstimate> history;
   std::optional<ident::MmfmResult> mmfm;
@@ -73,12 +78,16 @@ struct SessionData {
   double test_time_s = 0.0;  // plant/test time
   double wall_time_s = 0.0;
   std::optional<LoopTimingSummary> loop_timing;  // when the tick loop ran
-  int exit_code = kExitPass;
+  int exit_code = kExitOk;
   std::string outcome;  // one line
 };
 
-// Runs the whole test and writes every output file into options.out_dir.
+// Runs the whole test and writes every output file into options.out_dir (which
+// rig::io::prepare_out_dir has made fresh). Never throws: every failure is an exit code.
 SessionData run_commission(const TestConfig& config, const SessionOptions& options);
+// The same over a link the caller made (an in-process fake in the unit tests).
+SessionData run_commission(const TestConfig& config, const SessionOptions& options,
+                           drivers::GovernorLink& link);
 
 // Exit code for a supervisor trip cause.
 int exit_code_for(TripCause cause);

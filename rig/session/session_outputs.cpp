@@ -167,8 +167,20 @@ json report_json(const SessionData& d) {
                   {"limited_by_clamp", d.pilot->limited_by_clamp}};
   }
   j["excitation"] = {{"std_pct", d.excitation_sigma_pct},
+                     {"planned_std_pct", d.excitation_sigma_pct},
+                     {"applied_std_pct", d.applied_std_pct},
+                     {"applied_fraction", d.excitation_sigma_pct > 0.0
+                                              ? json(d.applied_std_pct / d.excitation_sigma_pct)
+                                              : json(nullptr)},
                      {"duration_s", d.excitation_s},
-                     {"stop_reason", d.stop_reason}};
+                     {"stop_reason", d.stop_reason},
+                     {"quality_flags", d.quality_flags}};
+  j["model_written"] = d.mmfm.has_value() && d.exit_code == kExitOk;
+  j["model_rejected"] = d.model_rejected;
+  j["ramp_down"] = {{"attempted", d.ramp_down.attempted},
+                    {"cleared", d.ramp_down.cleared},
+                    {"reconnects", d.ramp_down.reconnects},
+                    {"error", d.ramp_down.error}};
   if (d.mmfm) {
     const auto& m = *d.mmfm;
     j["mmfm"] = {{"num", report::to_json_array(m.model.num)},
@@ -222,20 +234,23 @@ io::Frf to_frf(const std::vector<fra::FrfPoint>& pts) {
 }
 
 template <class Fn>
-void attempt(const char* what, Fn fn) {
+bool attempt(const char* what, Fn fn) {
   try {
     fn();
+    return true;
   } catch (const std::exception& e) {
     fmt::print(stderr, "rig: could not write {}: {}\n", what, e.what());
+    return false;
   }
 }
 
 }  // namespace
 
-void write_outputs(const SessionData& d, const std::filesystem::path& out) {
+bool write_outputs(const SessionData& d, const std::filesystem::path& out) {
   std::error_code ec;
   std::filesystem::create_directories(out, ec);
-  if (d.mmfm) {
+  // A model only from a run that passed: a failed run writes none (DESIGN.md section 8).
+  if (d.mmfm && d.exit_code == kExitOk) {
     attempt("model.json", [&] {
       io::ModelFile m;
       m.tf = d.mmfm->model;
@@ -254,8 +269,10 @@ void write_outputs(const SessionData& d, const std::filesystem::path& out) {
   if (!d.sweep.empty())
     attempt("sweep.csv", [&] { io::write_frf(out / "sweep.csv", to_frf(d.sweep)); });
   if (!d.h1.empty()) attempt("h1.csv", [&] { io::write_frf(out / "h1.csv", to_frf(d.h1)); });
-  attempt("report.json", [&] { report::write_json_file(out / "report.json", report_json(d)); });
-  attempt("report.html", [&] { write_report_html(d, out / "report.html"); });
+  bool ok =
+      attempt("report.json", [&] { report::write_json_file(out / "report.json", report_json(d)); });
+  ok = attempt("report.html", [&] { write_report_html(d, out / "report.html"); }) && ok;
+  return ok;
 }
 
 }  // namespace rig::session

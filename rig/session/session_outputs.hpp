@@ -13,6 +13,6 @@ namespace rig::session {
 nlohmann::json report_json(const SessionData& data);
 void write_report_html(const SessionData& data, const std::filesystem::path& path);
 // Writes every output that the data supports; never throws for a missing part.
-void write_outputs(const SessionData& data, const std::filesystem::path& out_dir);
+bool write_outputs(const SessionData& data, const std::filesystem::path& out_dir);
 
 }  // namespace rig::session

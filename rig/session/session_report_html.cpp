@@ -19,25 +19,24 @@ namespace {
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
 report::Tone tone_for(int exit_code) {
-  if (exit_code == kExitPass) return report::Tone::kOk;
+  if (exit_code == kExitOk) return report::Tone::kOk;
   if (exit_code == kExitAcceptance) return report::Tone::kWarning;
   return report::Tone::kFatal;
 }
 
 std::string loop_timing_text(const LoopTimingSummary& t) {
-  const std::string exchange =
-      fmt::format("exchange p50 {:.2f} ms, p99 {:.2f} ms, max {:.2f} ms", t.exchange_p50_ms,
-                  t.exchange_p99_ms, t.exchange_max_ms);
+  const std::string exchange = fmt::format("exchange p50 {:.2f} ms, p99 {:.2f} ms, max {:.2f} ms",
+                                           t.exchange_p50_ms, t.exchange_p99_ms, t.exchange_max_ms);
   if (t.mode != "realtime") {
-    return fmt::format("lockstep, {} exchanges of {:.1f} ms plant time; {}", t.cycles,
-                       t.period_ms, exchange);
+    return fmt::format("lockstep, {} exchanges of {:.1f} ms plant time; {}", t.cycles, t.period_ms,
+                       exchange);
   }
-  return fmt::format("realtime at {:.0f} Hz: cycle start late by p50 {:.3f} ms, p99 {:.3f} ms, "
-                     "max {:.2f} ms; {} overruns in {} cycles, schedule moved {} times by {:.0f} ms in "
-                     "all ({}); {}",
-                     1e3 / t.period_ms, t.jitter_p50_ms, t.jitter_p99_ms, t.jitter_max_ms,
-                     t.overruns, t.cycles, t.slips, t.slip_total_ms, t.realtime_priority ? "SCHED_FIFO" : "normal priority",
-                     exchange);
+  return fmt::format(
+      "realtime at {:.0f} Hz: cycle start late by p50 {:.3f} ms, p99 {:.3f} ms, "
+      "max {:.2f} ms; {} overruns in {} cycles, schedule moved {} times by {:.0f} ms in "
+      "all ({}); {}",
+      1e3 / t.period_ms, t.jitter_p50_ms, t.jitter_p99_ms, t.jitter_max_ms, t.overruns, t.cycles,
+      t.slips, t.slip_total_ms, t.realtime_priority ? "SCHED_FIFO" : "normal priority", exchange);
 }
 
 void summary(report::HtmlReport& page, const SessionData& d) {
@@ -52,9 +51,9 @@ void summary(report::HtmlReport& page, const SessionData& d) {
                                      : "")},
       {"largest deviation", fmt::format("{:.2f} % of P0", d.max_abs_deviation_pct)}};
   if (d.steady) {
-    kv.push_back({"steady state", fmt::format("P0 {:.1f} kW, noise {:.3f} %, drift {:.3f} %",
-                                              d.steady->p0_kw, d.steady->noise_pct,
-                                              d.steady->drift_pct)});
+    kv.push_back(
+        {"steady state", fmt::format("P0 {:.1f} kW, noise {:.3f} %, drift {:.3f} %",
+                                     d.steady->p0_kw, d.steady->noise_pct, d.steady->drift_pct)});
   }
   if (d.pilot && d.pilot->ok) {
     kv.push_back({"pilot", fmt::format("gain {:.1f} kW/%, excitation std {:.3f} %",
@@ -65,11 +64,11 @@ void summary(report::HtmlReport& page, const SessionData& d) {
   }
   if (d.mmfm && d.mmfm->derived.valid) {
     const auto& g = d.mmfm->derived;
-    kv.push_back({"MMFM model", fmt::format("K {:.2f}+-{:.2f} kW/%, fn {:.3f}+-{:.3f} Hz, "
-                                            "zeta {:.3f}+-{:.3f}, Td {:.1f}+-{:.1f} ms",
-                                            g.gain, g.gain_std, g.fn_hz, g.fn_hz_std, g.zeta,
-                                            g.zeta_std, 1e3 * d.mmfm->delay_s,
-                                            1e3 * d.mmfm->delay_std_s)});
+    kv.push_back(
+        {"MMFM model", fmt::format("K {:.2f}+-{:.2f} kW/%, fn {:.3f}+-{:.3f} Hz, "
+                                   "zeta {:.3f}+-{:.3f}, Td {:.1f}+-{:.1f} ms",
+                                   g.gain, g.gain_std, g.fn_hz, g.fn_hz_std, g.zeta, g.zeta_std,
+                                   1e3 * d.mmfm->delay_s, 1e3 * d.mmfm->delay_std_s)});
   }
   if (d.compare_sweep) kv.push_back({"MMFM vs swept sine", d.compare_sweep->summary});
   if (d.compare_h1) kv.push_back({"MMFM vs H1", d.compare_h1->summary});
@@ -109,13 +108,15 @@ void bode(report::HtmlReport& page, const SessionData& d) {
   std::set<double> grid;
   for (double f : report::log_space(f_lo, f_hi, 160)) grid.insert(f);
   for (const auto& p : d.sweep) grid.insert(p.freq_hz);
-  for (const auto& p : d.h1) if (p.freq_hz >= f_lo && p.freq_hz <= f_hi) grid.insert(p.freq_hz);
+  for (const auto& p : d.h1)
+    if (p.freq_hz >= f_lo && p.freq_hz <= f_hi) grid.insert(p.freq_hz);
   const std::vector<double> f(grid.begin(), grid.end());
   auto measured = [&](const std::vector<fra::FrfPoint>& pts) {
     std::vector<std::complex<double>> h(f.size(), {kNaN, kNaN});
     for (const auto& p : pts) {
       const auto it = std::lower_bound(f.begin(), f.end(), p.freq_hz);
-      if (it != f.end() && *it == p.freq_hz) h[static_cast<std::size_t>(it - f.begin())] = p.value();
+      if (it != f.end() && *it == p.freq_hz)
+        h[static_cast<std::size_t>(it - f.begin())] = p.value();
     }
     return h;
   };
@@ -125,8 +126,10 @@ void bode(report::HtmlReport& page, const SessionData& d) {
     for (double x : f) m.response.push_back(d.mmfm->model.response(x));
     curves.push_back(m);
   }
-  if (!d.sweep.empty()) curves.push_back({"swept sine", measured(d.sweep), {}, {}, true, "#d62728"});
-  if (!d.h1.empty()) curves.push_back({"H1 (noise-driven)", measured(d.h1), {}, {}, true, "#2ca02c"});
+  if (!d.sweep.empty())
+    curves.push_back({"swept sine", measured(d.sweep), {}, {}, true, "#d62728"});
+  if (!d.h1.empty())
+    curves.push_back({"H1 (noise-driven)", measured(d.h1), {}, {}, true, "#2ca02c"});
   auto [mag, phase] = report::bode_charts("Frequency response, kW per % bias", f, curves);
   phase.series = phase_series(f, curves);
   page.section("Frequency response").chart(mag).chart(phase);
@@ -136,7 +139,8 @@ void bode(report::HtmlReport& page, const SessionData& d) {
     report::Series s{label, std::vector<double>(f.size(), kNaN), color, false, true, 1.5};
     for (const auto& p : pts) {
       const auto it = std::lower_bound(f.begin(), f.end(), p.freq_hz);
-      if (it != f.end() && *it == p.freq_hz) s.y[static_cast<std::size_t>(it - f.begin())] = p.coherence;
+      if (it != f.end() && *it == p.freq_hz)
+        s.y[static_cast<std::size_t>(it - f.begin())] = p.coherence;
     }
     coh.series.push_back(s);
   };
@@ -147,8 +151,8 @@ void bode(report::HtmlReport& page, const SessionData& d) {
 
 void correlations(report::HtmlReport& page, const SessionData& d) {
   if (d.ryu.size() == 0 || d.ruu.size() != d.ryu.size()) return;
-  report::Chart c{"Correlation functions (AC-coupled, averaged)", "lag (s)", "", {}, {}, {}, false,
-                  false, 280};
+  report::Chart c{
+      "Correlation functions (AC-coupled, averaged)", "lag (s)", "", {}, {}, {}, false, false, 280};
   report::Series ruu{"r_uu (%^2)", {}, "", false, false, 1.5};
   report::Series ryu{"r_yu (kW %)", {}, "", false, false, 1.5};
   report::Series model{"model h * r_uu", {}, "", true, false, 1.5};
@@ -192,22 +196,34 @@ void convergence(report::HtmlReport& page, const SessionData& d) {
     c.bands.push_back({1, 2, "rgba(31,119,180,0.18)"});
     page.chart(c);
   };
-  chart("gain K (kW/%)", [](const BlockEstimate& e) { return e.derived.gain; },
-        [](const BlockEstimate& e) { return e.derived.gain_std; });
-  chart("natural frequency fn (Hz)", [](const BlockEstimate& e) { return e.derived.fn_hz; },
-        [](const BlockEstimate& e) { return e.derived.fn_hz_std; });
-  chart("damping ratio zeta", [](const BlockEstimate& e) { return e.derived.zeta; },
-        [](const BlockEstimate& e) { return e.derived.zeta_std; });
+  chart(
+      "gain K (kW/%)", [](const BlockEstimate& e) { return e.derived.gain; },
+      [](const BlockEstimate& e) { return e.derived.gain_std; });
+  chart(
+      "natural frequency fn (Hz)", [](const BlockEstimate& e) { return e.derived.fn_hz; },
+      [](const BlockEstimate& e) { return e.derived.fn_hz_std; });
+  chart(
+      "damping ratio zeta", [](const BlockEstimate& e) { return e.derived.zeta; },
+      [](const BlockEstimate& e) { return e.derived.zeta_std; });
 }
 
 void deviation(report::HtmlReport& page, const SessionData& d) {
   if (d.trace.t_s.empty()) return;
-  report::Chart c{"Power deviation against the band", "test time (s)", "% of P0", d.trace.t_s,
-                  {}, {}, false, false, 280};
+  report::Chart c{"Power deviation against the band",
+                  "test time (s)",
+                  "% of P0",
+                  d.trace.t_s,
+                  {},
+                  {},
+                  false,
+                  false,
+                  280};
   const double band = d.config.safety.band_pct;
   c.series.push_back({"(P - P0) / P0", d.trace.deviation_pct, "", false, false, 1.0});
-  c.series.push_back({"+band", std::vector<double>(d.trace.t_s.size(), band), "#d62728", true, false, 1.5});
-  c.series.push_back({"-band", std::vector<double>(d.trace.t_s.size(), -band), "#d62728", true, false, 1.5});
+  c.series.push_back(
+      {"+band", std::vector<double>(d.trace.t_s.size(), band), "#d62728", true, false, 1.5});
+  c.series.push_back(
+      {"-band", std::vector<double>(d.trace.t_s.size(), -band), "#d62728", true, false, 1.5});
   c.series.push_back({"bias u (%)", d.trace.u_pct, "#7f7f7f", false, false, 1.0});
   page.section("Safety").chart(c);
   report::Table t{{"t (s)", "kind", "event"}, {}, {}};
@@ -222,8 +238,16 @@ void loop_timing(report::HtmlReport& page, const SessionData& d) {
   const bool rt = t.mode == "realtime";
   const std::string what = rt ? "cycle start lateness (ms)" : "exchange wall time (ms)";
   page.section("Loop timing").paragraph(loop_timing_text(t));
-  report::Chart h{rt ? "Lateness of the cycle start against the schedule" : "Wall time per exchange",
-                  what, "cycles", {}, {}, {}, false, true, 240};
+  report::Chart h{
+      rt ? "Lateness of the cycle start against the schedule" : "Wall time per exchange",
+      what,
+      "cycles",
+      {},
+      {},
+      {},
+      false,
+      true,
+      240};
   report::Series counts{"cycles", {}, "", false, true, 1.5};
   for (std::size_t i = 0; i < t.histogram.counts.size(); ++i) {
     h.x.push_back((static_cast<double>(i) + 0.5) * t.histogram.bin_ms);
@@ -231,8 +255,15 @@ void loop_timing(report::HtmlReport& page, const SessionData& d) {
   }
   h.series = {counts};
   if (!h.x.empty()) page.chart(h);
-  report::Chart s{"Largest " + what + " in each second", "test time (s)", "ms", t.second_t_s,
-                  {}, {}, false, false, 220};
+  report::Chart s{"Largest " + what + " in each second",
+                  "test time (s)",
+                  "ms",
+                  t.second_t_s,
+                  {},
+                  {},
+                  false,
+                  false,
+                  220};
   s.series = {{"max", t.second_max_ms, "", false, false, 1.0}};
   if (!s.x.empty()) page.chart(s);
 }

@@ -44,6 +44,12 @@ const char* to_string(TripCause cause) {
       return "governor_status";
     case TripCause::kExternal:
       return "external";
+    case TripCause::kBiasNotApplied:
+      return "bias_not_applied";
+    case TripCause::kImplausible:
+      return "implausible_reading";
+    case TripCause::kRigFailure:
+      return "rig_failure";
   }
   return "unknown";
 }
@@ -81,6 +87,13 @@ void validate(const SupervisorConfig& c) {
           "backoff fractions must satisfy 0 < start_fraction < zero_fraction <= 1");
   require(b.envelope_release_s > 0.0, "backoff.envelope_release_s must be > 0");
   require(b.recover_rate_per_s > 0.0, "backoff.recover_rate_per_s must be > 0");
+  require(b.fall_rate_per_s > 0.0, "backoff.fall_rate_per_s must be > 0");
+  require(b.min_gain_share >= 0.0 && b.min_gain_share <= 1.0,
+          "backoff.min_gain_share must be in [0, 1]");
+  const EchoCheck& e = c.echo;
+  require(e.tolerance_pct >= 0.0 && e.relative_tolerance >= 0.0, "echo tolerances must be >= 0");
+  require(e.delay_ticks >= 0 && e.delay_ticks < 64, "echo.delay_ticks must be 0 to 63");
+  require(e.max_bad_ticks >= 0, "echo.max_bad_ticks must be >= 0");
   require(std::isfinite(c.noise_rms_kw) && c.noise_rms_kw >= 0.0,
           "noise_rms_kw must be finite and >= 0");
   require(b.plan_fraction > 0.0 && b.plan_fraction <= 1.0,
@@ -150,6 +163,10 @@ void Supervisor::start() {
   ms_r_held_ = 0.0;
   g2_held_ = 0.0;
   last_bias_pct_ = config_.baseline_bias_pct;
+  commands_[0] = config_.baseline_bias_pct;  // what the governor held before the phase
+  head_ = 0;
+  filled_ = 1;
+  bad_echo_ticks_ = 0;
 }
 
 void Supervisor::finish() {
@@ -181,6 +198,14 @@ void Supervisor::judge(const drivers::Sample& s) {
                   unsigned{s.status}, unsigned{config_.trip_status_mask},
                   unsigned{config_.required_status_mask});
     trip(TripCause::kGovernorStatus, line);
+  } else if (counter_backwards_) {
+    trip(TripCause::kImplausible, format("sample counter went backwards to %.0f", s.counter));
+  } else if (config_.plausible.speed && !(s.speed_rpm > 0.0)) {
+    trip(TripCause::kImplausible,
+         format("engine speed reads %.1f rpm on a running set", s.speed_rpm));
+  } else if (config_.plausible.freq && !(s.freq_hz > 0.0)) {
+    trip(TripCause::kImplausible,
+         format("bus frequency reads %.3f Hz on a running set", s.freq_hz));
   } else if (unchanged_ticks_ >= config_.stale_ticks) {
     trip(TripCause::kStaleSample, format("sample counter %.0f unchanged for %.0f ticks", s.counter,
                                          static_cast<double>(unchanged_ticks_)));
@@ -188,11 +213,49 @@ void Supervisor::judge(const drivers::Sample& s) {
     trip(TripCause::kOutOfBand, format("power %.1f kW is %+.1f kW from P0 (band %.1f kW)",
                                        s.power_kw, dev, config_.band_kw()));
   }
+  if (!trip_) judge_echo(s);
   if (trip_) trip_->tick = tick_;
+}
+
+// Layer 0: the echo matches one of the commands the governor may be showing (the newest
+// delay_ticks + 1, newest first).
+void Supervisor::judge_echo(const drivers::Sample& s) {
+  const EchoCheck& e = config_.echo;
+  if (!e.enabled || filled_ == 0) return;
+  const int window = std::min(e.delay_ticks + 1, filled_);
+  double nearest_cmd = commands_[head_];
+  double nearest_err = std::numeric_limits<double>::infinity();
+  for (int j = 0; j < window; ++j) {
+    const double cmd = commands_[(head_ - j + kCommandHistory) % kCommandHistory];
+    const double err = std::abs(s.bias_echo_pct - cmd);
+    if (err <= e.tolerance_pct + e.relative_tolerance * std::abs(cmd)) {
+      bad_echo_ticks_ = 0;
+      return;
+    }
+    if (err < nearest_err) nearest_err = err, nearest_cmd = cmd;
+  }
+  if (++bad_echo_ticks_ > e.max_bad_ticks) {
+    char line[200];
+    std::snprintf(line, sizeof line,
+                  "the governor's bias echo %.3f %% does not follow the command %.3f %% "
+                  "(tolerance %.3f %% + %.0f %%) for %d ticks: the bias is not applied as sent",
+                  s.bias_echo_pct, nearest_cmd, e.tolerance_pct, 100.0 * e.relative_tolerance,
+                  bad_echo_ticks_);
+    trip(TripCause::kBiasNotApplied, line);
+  }
+}
+
+// A counter that moved backwards (by more than half its range, modulo 2^16).
+void Supervisor::judge_counter(const drivers::Sample& s) {
+  if (last_counter_) {
+    const auto moved = static_cast<std::uint16_t>(s.counter - *last_counter_);
+    counter_backwards_ = moved > 0x8000u;
+  }
 }
 
 SupervisorOutput Supervisor::tick(const drivers::Sample& sample, double request_pct) {
   ++tick_;
+  judge_counter(sample);
   // Stale-counter rule: consecutive ticks that returned the same counter.
   if (last_counter_ && *last_counter_ == sample.counter) {
     ++unchanged_ticks_;
@@ -244,7 +307,8 @@ void Supervisor::update_statistics(double d) {
   const double noise_var = config_.noise_rms_kw * config_.noise_rms_kw;
   const double var_d = ms_d_ - mean_d_ * mean_d_;
   g2_held_ *= std::exp(-config_.dt_s / b.statistics_hold_s);
-  if (ms_u_ > 1e-12 && var_d > 2.0 * noise_var) {
+  const bool fair_share = ms_u_ >= b.min_gain_share * ms_r_;
+  if (ms_u_ > 1e-12 && fair_share && var_d > 2.0 * noise_var) {
     g2_held_ = std::max(g2_held_, (var_d - noise_var) / ms_u_);
   }
 }
@@ -296,7 +360,8 @@ SupervisorOutput Supervisor::command(double request_pct, double deviation_kw) {
       ms_r_ += config_.dt_s / b.rms_time_constant_s * (r * r - ms_r_);
       ms_r_held_ = std::max(ms_r_, ms_r_held_ * std::exp(-config_.dt_s / b.statistics_hold_s));
       const double cap = std::min(target, statistical_cap());
-      scale_ = std::min(cap, scale_ + b.recover_rate_per_s * config_.dt_s);
+      scale_ = std::clamp(cap, scale_ - b.fall_rate_per_s * config_.dt_s,
+                          scale_ + b.recover_rate_per_s * config_.dt_s);
       state_ = cap < 1.0 ? SupervisorState::kBackingOff : SupervisorState::kRunning;
       bias = base + scale_ * r;
       break;
@@ -306,6 +371,9 @@ SupervisorOutput Supervisor::command(double request_pct, double deviation_kw) {
   if (!std::isfinite(bias)) bias = base;
   bias = std::clamp(bias, -config_.clamp_pct, config_.clamp_pct);
   last_bias_pct_ = bias;
+  head_ = (head_ + 1) % kCommandHistory;
+  commands_[head_] = bias;
+  filled_ = std::min(filled_ + 1, kCommandHistory);
 
   SupervisorOutput out;
   out.bias_pct = bias;

@@ -38,8 +38,16 @@
 //      not open the cap just before the next burst. g^2 enters the hold only once the
 //      response stands out of the noise (var d > 2 s_n^2): set noise_rms_kw, or the cap
 //      learns noise / tiny excitation at the soft start and stays needlessly low.
-//      The applied scale drops to min(s*, s_cap) at once and rises at most
-//      recover_rate_per_s (which is also the soft start from 0 after start()).
+//      g^2 is learnt only while the applied excitation is a fair share of the request
+//      (ms(u) >= min_gain_share ms(r)): at a soft start, or while the cap holds the scale
+//      low, var d over a tiny ms(u) is noise divided by almost nothing, and learning it
+//      latched the cap near zero for the whole phase (an excitation that collapsed).
+//      The applied scale falls towards min(s*, s_cap) at most fall_rate_per_s (no bias step)
+//      and rises at most recover_rate_per_s (which is also the soft start from 0).
+//  (0) bias acknowledgement, when echo.enabled: the governor's echo of the applied bias
+//      (Sample::bias_echo_pct) must match one of the last echo.delay_ticks + 1 commands
+//      within echo.tolerance_pct + echo.relative_tolerance |command|; more than
+//      echo.max_bad_ticks consecutive mismatches trip (kBiasNotApplied).
 //  (4) clamp, always last: |bias| <= clamp_pct whatever the request or estimate (a NaN
 //      request counts as 0).
 //  (5) heartbeat: incremented every tick; the link writes it with the bias.
@@ -63,8 +71,11 @@ enum class TripCause {
   kMissingSample,   // no sample this tick (timeout)
   kNotFinite,       // NaN/Inf power
   kLinkError,       // link read/write failure
-  kGovernorStatus,  // status: heartbeat lost, plant fault, or not running
+  kGovernorStatus,  // status: heartbeat lost, plant fault, not running, bias not active
   kExternal,        // tripped by the caller (operator abort, sequencer fault)
+  kBiasNotApplied,  // the governor's echo does not follow the command (layer 0)
+  kImplausible,     // a reading that cannot be true: speed or frequency 0, counter backwards
+  kRigFailure,      // the rig itself failed (recording or report write, disk full)
 };
 const char* to_string(SupervisorState state);
 const char* to_string(TripCause cause);
@@ -78,6 +89,8 @@ struct BackoffConfig {
   double zero_fraction = 0.9;        // envelope / band where the scale reaches 0
   double envelope_release_s = 2.0;   // peak-hold decay time constant
   double recover_rate_per_s = 0.1;   // fastest rise of the scale (soft start: 10 s to 1)
+  double fall_rate_per_s = 5.0;      // fastest fall of the scale (1 to 0 in 0.2 s, no step)
+  double min_gain_share = 0.05;      // learn g^2 only while ms(u) >= this ms(r)
   double resonance_hz = 2.0;         // dominant mode (prior or pilot); 0: no derivative term
   double plan_fraction = 0.8;        // statistical cap: predicted peak within this of the band
   double peak_to_rms = 4.0;          // response peak / rms: 4 for Gaussian noise excitation,
@@ -102,6 +115,21 @@ class DeviationEnvelope {
   double envelope_kw_ = 0.0;
 };
 
+// Layer 0: the governor applies what it is sent (DESIGN.md section 8).
+struct EchoCheck {
+  bool enabled = false;
+  double tolerance_pct = 0.02;      // absolute, % of rated (20 quantisation steps)
+  double relative_tolerance = 0.1;  // plus this share of |command|
+  int delay_ticks = 5;              // the echo may lag the command this many ticks
+  int max_bad_ticks = 5;            // consecutive mismatches allowed; one more trips
+};
+
+// Readings that cannot be true of a running set.
+struct PlausibilityCheck {
+  bool speed = false;  // speed_rpm must stay > 0 (on when the steady state saw a speed)
+  bool freq = false;   // freq_hz must stay > 0 (on when the steady state saw a frequency)
+};
+
 struct SupervisorConfig {
   double p0_kw = 0.0;                // steady power from the steady-state check
   double band_fraction = 0.03;       // |P - P0| <= band_fraction P0; > 0.03 needs the override
@@ -115,6 +143,8 @@ struct SupervisorConfig {
   std::uint16_t trip_status_mask = drivers::kHeartbeatLost | drivers::kPlantFault;
   std::uint16_t required_status_mask = drivers::kRunning;  // a cleared bit here trips
   BackoffConfig backoff;
+  EchoCheck echo;
+  PlausibilityCheck plausible;
 
   double band_kw() const { return band_fraction * p0_kw; }
 };
@@ -164,6 +194,8 @@ class Supervisor {
  private:
   bool active() const;
   void judge(const drivers::Sample& sample);
+  void judge_echo(const drivers::Sample& sample);
+  void judge_counter(const drivers::Sample& sample);
   SupervisorOutput command(double request_pct, double deviation_kw);
   double ramp_toward_baseline() const;
 
@@ -182,6 +214,10 @@ class Supervisor {
   double mean_d_ = 0.0, ms_d_ = 0.0, ms_u_ = 0.0, ms_r_ = 0.0;  // exponentially weighted
   double ms_r_held_ = 0.0, g2_held_ = 0.0;
   double last_bias_pct_ = 0.0;
+  static constexpr int kCommandHistory = 64;  // bound of echo.delay_ticks + 1
+  double commands_[kCommandHistory] = {};     // ring of the last commands, newest at head_
+  int head_ = 0, filled_ = 0, bad_echo_ticks_ = 0;
+  bool counter_backwards_ = false;
 };
 
 }  // namespace rig::session

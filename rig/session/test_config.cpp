@@ -1,6 +1,7 @@
 #include "rig/session/test_config.hpp"
 
 #include <fmt/format.h>
+#include <toml++/toml.h>
 
 #include <cmath>
 #include <fstream>
@@ -8,7 +9,6 @@
 #include <map>
 #include <sstream>
 #include <vector>
-#include <toml++/toml.h>
 
 namespace rig::session {
 namespace {
@@ -21,13 +21,20 @@ std::string at_line(const toml::node& node) {
 
 const char* type_name(const toml::node& node) {
   switch (node.type()) {
-    case toml::node_type::string: return "a string";
-    case toml::node_type::integer: return "an integer";
-    case toml::node_type::floating_point: return "a number";
-    case toml::node_type::boolean: return "a boolean";
-    case toml::node_type::table: return "a table";
-    case toml::node_type::array: return "an array";
-    default: return "a date/time";
+    case toml::node_type::string:
+      return "a string";
+    case toml::node_type::integer:
+      return "an integer";
+    case toml::node_type::floating_point:
+      return "a number";
+    case toml::node_type::boolean:
+      return "a boolean";
+    case toml::node_type::table:
+      return "a table";
+    case toml::node_type::array:
+      return "an array";
+    default:
+      return "a date/time";
   }
 }
 
@@ -131,14 +138,17 @@ std::map<std::string, Section> schema(TestConfig& c) {
                {"sample_rate_hz", num(c.link.sample_rate_hz)},
                {"lockstep_ticks", whole(c.link.lockstep_ticks)},
                {"timeout_s", num(c.link.timeout_s)}};
-  s["plant"] = {{"rated_power_kw", num(c.plant.rated_power_kw)},
-                {"preset", text(c.plant.preset)}};
+  s["plant"] = {{"rated_power_kw", num(c.plant.rated_power_kw)}, {"preset", text(c.plant.preset)}};
   s["safety"] = {{"band_pct", num(c.safety.band_pct)},
                  {"allow_band_above_3pct", flag(c.safety.allow_band_above_3pct)},
                  {"plan_fraction", num(c.safety.plan_fraction)},
                  {"backoff_fraction", num(c.safety.backoff_fraction)},
                  {"clamp_pct", num(c.safety.clamp_pct)},
-                 {"ramp_pct_per_s", num(c.safety.ramp_pct_per_s)}};
+                 {"ramp_pct_per_s", num(c.safety.ramp_pct_per_s)},
+                 {"activation_timeout_s", num(c.safety.activation_timeout_s)},
+                 {"echo_tolerance_pct", num(c.safety.echo_tolerance_pct)},
+                 {"echo_delay_s", num(c.safety.echo_delay_s)},
+                 {"echo_max_bad_s", num(c.safety.echo_max_bad_s)}};
   s["steady_state"] = {{"duration_s", num(c.steady_state.duration_s)},
                        {"max_noise_pct", num(c.steady_state.max_noise_pct)},
                        {"max_drift_pct", num(c.steady_state.max_drift_pct)},
@@ -167,7 +177,8 @@ std::map<std::string, Section> schema(TestConfig& c) {
                {"averaging_w", whole(c.mmfm.averaging_w)},
                {"target_rel_std_error", num(c.mmfm.target_rel_std_error)},
                {"min_duration_s", num(c.mmfm.min_duration_s)},
-               {"max_duration_s", num(c.mmfm.max_duration_s)}};
+               {"max_duration_s", num(c.mmfm.max_duration_s)},
+               {"min_applied_fraction", num(c.mmfm.min_applied_fraction)}};
   s["sweep"] = {{"enabled", flag(c.sweep.enabled)},
                 {"from_hz", num(c.sweep.from_hz)},
                 {"to_hz", num(c.sweep.to_hz)},

@@ -20,15 +20,15 @@ struct ConfigError : std::runtime_error {
 inline constexpr double kStandardBandPct = 3.0;
 
 struct LinkSettings {
-  std::string uri;                  // e.g. modbus+tcp://127.0.0.1:1502?unit=1
-  double sample_rate_hz = 100.0;    // one write/read exchange per sample
-  int lockstep_ticks = 0;           // > 0: simulated plant advanced this many ticks per sample
-  double timeout_s = 0.5;           // response timeout per request
+  std::string uri;                // e.g. modbus+tcp://127.0.0.1:1502?unit=1
+  double sample_rate_hz = 100.0;  // one write/read exchange per sample
+  int lockstep_ticks = 0;         // > 0: simulated plant advanced this many ticks per sample
+  double timeout_s = 0.5;         // response timeout per request
 };
 
 struct PlantSettings {
-  double rated_power_kw = 4600.0;   // bias is in % of this
-  std::string preset;               // emulated plant preset (recorded only)
+  double rated_power_kw = 4600.0;  // bias is in % of this
+  std::string preset;              // emulated plant preset (recorded only)
 };
 
 struct SafetySettings {
@@ -38,13 +38,18 @@ struct SafetySettings {
   double backoff_fraction = 0.9;       // amplitude backs off above this fraction of the band
   double clamp_pct = 5.0;              // |bias| never exceeds this (% of rated power)
   double ramp_pct_per_s = 2.0;         // bias ramp rate at start-up and ramp-down
+  // Bias acknowledgement (DESIGN.md section 8, layer 0).
+  double activation_timeout_s = 2.0;  // governor must report "bias active" within this
+  double echo_tolerance_pct = 0.02;   // |echo - command| allowed, plus 10 % of |command|
+  double echo_delay_s = 0.05;         // the echo may lag the command this long
+  double echo_max_bad_s = 0.05;       // a mismatch lasting longer than this trips
 };
 
 struct SteadyStateSettings {
-  double duration_s = 10.0;      // length of the steady-state record
-  double max_noise_pct = 0.5;    // std(P - trend) limit, % of P0
-  double max_drift_pct = 0.5;    // |trend slope| * duration limit, % of P0
-  double min_power_kw = 1.0;     // the set must be loaded (P0 above this)
+  double duration_s = 10.0;    // length of the steady-state record
+  double max_noise_pct = 0.5;  // std(P - trend) limit, % of P0
+  double max_drift_pct = 0.5;  // |trend slope| * duration limit, % of P0
+  double min_power_kw = 1.0;   // the set must be loaded (P0 above this)
 };
 
 struct PilotSettings {
@@ -56,37 +61,40 @@ enum class ExcitationType { kGaussian, kPrbs };
 
 struct ExcitationSettings {
   ExcitationType type = ExcitationType::kGaussian;
-  double bandwidth_hz = 4.0;        // about twice the expected mode (MMFM.md section 8)
+  double bandwidth_hz = 4.0;  // about twice the expected mode (MMFM.md section 8)
   std::uint64_t seed = 1;
-  double ac_coupling_rc_s = 1.6;    // matched high-pass RC on excitation and response; 0 = off
+  double ac_coupling_rc_s = 1.6;  // matched high-pass RC on excitation and response; 0 = off
   int prbs_register_length = 10;
   int prbs_clock_divider = 2;
 };
 
 struct MmfmSettings {
-  int order_n = 2;                  // denominator order
-  int order_m = 0;                  // numerator order
-  std::optional<double> delay_s;    // nullopt: estimated
-  int lags = 256;                   // correlation window (samples)
-  int block_size = 2048;            // samples per correlator block / live estimate
-  int skip = 1;                     // Fell's skip
+  int order_n = 2;                       // denominator order
+  int order_m = 0;                       // numerator order
+  std::optional<double> delay_s;         // nullopt: estimated
+  int lags = 256;                        // correlation window (samples)
+  int block_size = 2048;                 // samples per correlator block / live estimate
+  int skip = 1;                          // Fell's skip
   std::string correlator = "direct";     // direct | fft | relay | polarity
   std::string averaging = "cumulative";  // cumulative | exponential (weight averaging_w)
-  int averaging_w = 8;              // exponential averaging weight (blocks)
-  double target_rel_std_error = 0.03;  // stop when every parameter's rel. std error is below
-  double min_duration_s = 120.0;    // never stop before this much excitation
-  double max_duration_s = 600.0;    // stop regardless
+  int averaging_w = 8;                   // exponential averaging weight (blocks)
+  double target_rel_std_error = 0.03;    // stop when every parameter's rel. std error is below
+  double min_duration_s = 120.0;         // never stop before this much excitation
+  double max_duration_s = 600.0;         // stop regardless
+  // The applied excitation (std of u, after the supervisor) must reach this share of the
+  // planned std, or the data do not support a model (exit 1, no model.json).
+  double min_applied_fraction = 0.5;
 };
 
 struct SweepSettings {
   bool enabled = true;
   double from_hz = 0.3;
   double to_hz = 6.0;
-  int points = 16;              // log-spaced
-  double settle_cycles = 3.0;   // at least this many cycles settle after each change
-  double integrate_cycles = 8.0;  // at least this many whole cycles are integrated
+  int points = 16;                     // log-spaced
+  double settle_cycles = 3.0;          // at least this many cycles settle after each change
+  double integrate_cycles = 8.0;       // at least this many whole cycles are integrated
   double settle_time_constants = 8.0;  // and settle this many slowest time constants
-  double min_integrate_s = 10.0;  // and integrate at least this long (noise, drift)
+  double min_integrate_s = 10.0;       // and integrate at least this long (noise, drift)
 };
 
 struct CompareSettings {
@@ -94,12 +102,12 @@ struct CompareSettings {
   double to_hz = 5.0;
   double mag_tol_db = 1.0;
   double phase_tol_deg = 5.0;
-  double min_coherence = 0.8;   // sweep points below this are excluded from the check
+  double min_coherence = 0.8;  // sweep points below this are excluded from the check
 };
 
 struct OutputSettings {
-  double flush_interval_s = 0.5;   // recording flushed at least this often
-  double live_interval_s = 1.0;    // live-view refresh (plain lines when not a TTY)
+  double flush_interval_s = 0.5;  // recording flushed at least this often
+  double live_interval_s = 1.0;   // live-view refresh (plain lines when not a TTY)
 };
 
 struct TestConfig {

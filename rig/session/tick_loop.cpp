@@ -1,7 +1,6 @@
 #include "rig/session/tick_loop.hpp"
 
 #include <fmt/format.h>
-
 #include <pthread.h>
 #include <sched.h>
 
@@ -13,24 +12,27 @@ namespace rig::session {
 
 const char* to_string(Phase phase) {
   switch (phase) {
-    case Phase::kSteady: return "steady";
-    case Phase::kPilot: return "pilot";
-    case Phase::kExcite: return "excite";
-    case Phase::kSweep: return "sweep";
+    case Phase::kSteady:
+      return "steady";
+    case Phase::kPilot:
+      return "pilot";
+    case Phase::kExcite:
+      return "excite";
+    case Phase::kSweep:
+      return "sweep";
   }
   return "?";
 }
 
 const std::vector<std::string>& recording_columns() {
   static const std::vector<std::string> columns = {
-      "t",       "u",        "y",           "speed_rpm",     "freq_hz", "status",
-      "phase",   "request",  "bias_echo",   "plant_time_s",  "counter"};
+      "t",     "u",       "y",         "speed_rpm",    "freq_hz", "status",
+      "phase", "request", "bias_echo", "plant_time_s", "counter"};
   return columns;
 }
 
 TickLoop::TickLoop(drivers::GovernorLink& link, const TestConfig& config,
-                   io::RecordingWriter& recorder, LiveView& view,
-                   const std::atomic<bool>* abort)
+                   io::RecordingWriter& recorder, LiveView& view, const std::atomic<bool>* abort)
     : link_(link),
       config_(config),
       recorder_(recorder),
@@ -96,8 +98,8 @@ void TickLoop::pace() {
   } else if (fifo_) {
     set_fifo(true);
   }
-  const auto due = start_ + std::chrono::duration_cast<Clock::duration>(
-                                std::chrono::duration<double>(t_s()));
+  const auto due =
+      start_ + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(t_s()));
   const auto arrived = Clock::now();
   const bool overrun = ticks_ > 0 && arrived >= due;  // no time left to sleep
   std::this_thread::sleep_until(due);
@@ -130,10 +132,12 @@ TickResult TickLoop::observe() {
   exchanged();
   if (read) {
     failures_ = 0;
+    last_link_error_.clear();
     r.sample = read.value();
     record(read.value(), 0.0, 0.0);
   } else {
     ++failures_;
+    last_link_error_ = read.error().message();
   }
   last_read_ = std::move(read);
   ++ticks_;
@@ -149,8 +153,10 @@ TickResult TickLoop::prime() {
   exchanged();
   if (read && written) {
     failures_ = 0;
+    last_link_error_.clear();
   } else {
     ++failures_;
+    last_link_error_ = !written ? written.error().message() : read.error().message();
   }
   if (read) {
     r.sample = read.value();
@@ -177,19 +183,23 @@ TickResult TickLoop::supervised(Supervisor& sup, double request_pct) {
   bool ok = true;
   if (auto written = link_.write(r.out.bias_pct); !written) {
     ok = false;
+    last_link_error_ = written.error().message();
     if (!sup.tripped()) sup.trip(TripCause::kLinkError, written.error().message());
   }
   auto read = exchange_read();
   exchanged();
   if (read && ok) {
     failures_ = 0;
+    last_link_error_.clear();
   } else {
     ++failures_;
+    if (!read) last_link_error_ = read.error().message();
   }
   if (read) {
     r.sample = read.value();
     record(read.value(), r.out.excitation_pct, request_pct);
   }
+  if (!rig_failure_.empty() && !sup.tripped()) sup.trip(TripCause::kRigFailure, rig_failure_);
   status_.bias_pct = r.out.bias_pct;
   last_read_ = std::move(read);
   ++ticks_;
@@ -201,18 +211,23 @@ void TickLoop::record(const drivers::Sample& s, double u_pct, double request_pct
   if (std::isfinite(deviation_pct)) {
     status_.deviation_pct = deviation_pct;
     status_.peak_deviation_pct = std::max(status_.peak_deviation_pct, std::abs(deviation_pct));
-    max_dev_pct_ = phase_ == Phase::kSteady ? max_dev_pct_
-                                              : std::max(max_dev_pct_, std::abs(deviation_pct));
+    max_dev_pct_ =
+        phase_ == Phase::kSteady ? max_dev_pct_ : std::max(max_dev_pct_, std::abs(deviation_pct));
   }
   status_.elapsed_s = t_s();
   // Non-finite readings are not written: the recording must stay readable by `rig
   // identify`; the trip they cause is in the events and the report.
-  const bool finite = std::isfinite(s.power_kw) && std::isfinite(s.speed_rpm) &&
-                      std::isfinite(s.freq_hz);
-  if (finite) {
-    recorder_.append({t_s(), u_pct, s.power_kw, s.speed_rpm, s.freq_hz,
-                      static_cast<double>(s.status), static_cast<double>(phase_), request_pct,
-                      s.bias_echo_pct, s.plant_time_s, static_cast<double>(s.counter)});
+  const bool finite =
+      std::isfinite(s.power_kw) && std::isfinite(s.speed_rpm) && std::isfinite(s.freq_hz);
+  if (finite && rig_failure_.empty()) {
+    try {
+      recorder_.append({t_s(), u_pct, s.power_kw, s.speed_rpm, s.freq_hz,
+                        static_cast<double>(s.status), static_cast<double>(phase_), request_pct,
+                        s.bias_echo_pct, s.plant_time_s, static_cast<double>(s.counter)});
+    } catch (const std::exception& e) {
+      // Nothing throws across the tick: the next supervised tick trips on it.
+      rig_failure_ = std::string("cannot write the recording: ") + e.what();
+    }
   }
   if (ticks_ % static_cast<std::uint64_t>(std::max(1.0, config_.link.sample_rate_hz / 10.0)) == 0 &&
       finite) {

@@ -11,8 +11,8 @@
 
 #include "drivers/governor_link.hpp"
 #include "rig/io/recording_writer.hpp"
-#include "rig/session/loop_timing.hpp"
 #include "rig/session/live_view.hpp"
+#include "rig/session/loop_timing.hpp"
 #include "rig/session/supervisor.hpp"
 #include "rig/session/test_config.hpp"
 
@@ -62,6 +62,11 @@ class TickLoop {
   bool abort_requested() const { return abort_ != nullptr && abort_->load(); }
   // Consecutive failed reads/writes: the link is considered gone above a second's worth.
   bool link_gone() const;
+  // The last link error of a read or write ("" when the last exchange succeeded).
+  const std::string& last_link_error() const { return last_link_error_; }
+  // A failure of the rig itself (the recording could not be written): "" while none. A
+  // supervised tick turns it into a kRigFailure trip; nothing is thrown across the tick.
+  const std::string& rig_failure() const { return rig_failure_; }
   LiveStatus& status() { return status_; }
   void show(bool force = false);
   // Power deviation (P - P0) / P0 % trace, decimated to ~10 Hz, for the report.
@@ -101,6 +106,8 @@ class TickLoop {
   Trace trace_;
   double p0_kw_ = 0.0;
   double max_dev_pct_ = 0.0;
+  std::string last_link_error_;
+  std::string rig_failure_;
 };
 
 }  // namespace rig::session

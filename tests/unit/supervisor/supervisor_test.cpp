@@ -297,11 +297,20 @@ TEST(SupervisorBackoff, ScalesDownAboveStartFractionAndRecoversSlowly) {
   r.sup = Supervisor(c);
   r.sup.start();
   for (int i = 0; i < 1100; ++i) r.last = r.sup.tick(good_sample(++r.counter), 0.5);
-  // A deviation of 75 % of the band (78.75 kW): halfway between 60 % and 90 % -> scale 0.5.
-  SupervisorOutput out = r.sup.tick(good_sample(++r.counter, kP0 + 78.75), 0.5);
-  EXPECT_EQ(out.state, SupervisorState::kBackingOff);
+  // A deviation of 75 % of the band (78.75 kW): halfway between 60 % and 90 % -> scale 0.5,
+  // reached at the fall rate (5 /s: 0.05 per tick), so the bias never steps.
+  SupervisorOutput out;
+  double prev_scale = 1.0;
+  for (int i = 0; i < 10; ++i) {
+    out = r.sup.tick(good_sample(++r.counter, kP0 + 78.75), 0.5);
+    EXPECT_EQ(out.state, SupervisorState::kBackingOff);
+    EXPECT_NEAR(out.scale, prev_scale - 0.05, 1e-9) << "tick " << i;
+    prev_scale = out.scale;
+  }
   EXPECT_NEAR(out.scale, 0.5, 1e-9);
   EXPECT_NEAR(out.bias_pct, 0.2 + 0.25, 1e-9);
+  out = r.sup.tick(good_sample(++r.counter, kP0 + 78.75), 0.5);
+  EXPECT_NEAR(out.scale, 0.5, 1e-9);  // and holds there
   // Back at P0 the envelope decays with 2 s and the scale may rise only 0.001 per tick.
   double prev = out.scale;
   for (int i = 0; i < 100; ++i) {
