@@ -5,13 +5,12 @@
 #include <cstdio>
 #include <string>
 
-#include "drivers/bias.hpp"
-
 namespace drivers::j1939 {
 namespace {
 
 constexpr std::uint32_t kRawMax16 = 0xFAFF;      // J1939 largest valid 2-byte value
 constexpr std::uint32_t kRawMax32 = 0xFAFFFFFF;  // J1939 largest valid 4-byte value
+constexpr int kBiasZeroRaw = 32000;              // -kBiasOffsetPct / kBiasPctPerBit
 
 std::string pgn_text(std::uint32_t pgn) {
   char buf[24];
@@ -85,6 +84,25 @@ LinkResult<void> check_sum_and_counter(const can_frame& f, std::uint32_t pgn, st
   return {};
 }
 
+// Enable state of 0xFF50 byte 2 bits 0-1 (the J1939 2-bit state parameter).
+constexpr std::uint8_t kStateOff = 0b00;
+constexpr std::uint8_t kStateOn = 0b01;
+constexpr std::uint8_t kStateError = 0b10;
+constexpr std::uint8_t kStateDontCare = 0b11;
+
+// A bias SLOT at data[at..at+1]; kProtocol for the reserved, error and not-available ranges.
+LinkResult<double> bias_field(const can_frame& f, int at, std::uint32_t pgn, const char* what) {
+  const std::uint16_t raw = get_u16(&f.data[at]);
+  const auto bias = decode_bias(raw);
+  if (!bias) {
+    char buf[80];
+    std::snprintf(buf, sizeof buf, "%s 0x%04X is not a value (J1939 %s)", what, raw,
+                  raw >= 0xFF00 ? "not available" : (raw >= 0xFE00 ? "error" : "reserved"));
+    return codec_error(LinkErrorKind::kProtocol, pgn, buf);
+  }
+  return *bias;
+}
+
 // Byte 7 layout of the proprietary frames: counter in the high nibble, checksum in the low.
 void seal_high_counter(can_frame& f, std::uint8_t counter) {
   counter &= 0x0F;
@@ -93,6 +111,23 @@ void seal_high_counter(can_frame& f, std::uint8_t counter) {
 }
 
 }  // namespace
+
+// raw = round(bias / 0.001) + 32000: the same rounding as the Modbus map (drivers/bias.hpp),
+// so both links put the same 0.001 % step on the wire.
+std::uint16_t encode_bias(double bias_pct) {
+  if (std::isnan(bias_pct)) return kBiasZeroRaw;
+  const double raw = std::round(bias_pct / kBiasPctPerBit) + kBiasZeroRaw;
+  if (!(raw > 0.0)) return 0;
+  return raw >= kBiasRawMax ? kBiasRawMax : static_cast<std::uint16_t>(raw);
+}
+
+std::optional<double> decode_bias(std::uint16_t raw) {
+  if (raw > kBiasRawMax) return std::nullopt;
+  // Integer steps first, so that raw 32000 is exactly 0 %.
+  return (static_cast<int>(raw) - kBiasZeroRaw) * kBiasPctPerBit;
+}
+
+double quantise_bias_slot(double bias_pct) { return *decode_bias(encode_bias(bias_pct)); }
 
 bool is_pdu1(std::uint32_t pgn) { return ((pgn >> 8) & 0xFF) < 240; }
 
@@ -136,12 +171,15 @@ std::uint8_t source_of(const can_frame& f) { return static_cast<std::uint8_t>(f.
 // ---- TSC1 ----------------------------------------------------------------------------------
 
 can_frame encode_tsc1(const Tsc1& m, std::uint8_t source, std::uint8_t destination) {
-  can_frame f = blank_frame(Id{3, kPgnTsc1, source, destination});
-  // Byte 0: override mode 01 (speed control), speed conditions 00, override priority 11 (low),
-  // bits 6-7 reserved (11).
-  f.data[0] = 0b11'11'00'01;
-  put_u16(&f.data[1],
-          static_cast<std::uint16_t>(scale_clamped(m.speed_rpm, kSpeedRpmPerBit, 0.0, kRawMax16)));
+  can_frame f = blank_frame(Id{kPriorityControl, kPgnTsc1, source, destination});
+  // Byte 0: override control mode 01 (speed control) or 00 (no override: release), speed
+  // conditions 00, override priority 11 (low), bits 6-7 reserved (11). Releasing leaves the
+  // speed "not available" (0xFFFF).
+  f.data[0] = m.release ? 0b11'11'00'00 : 0b11'11'00'01;
+  if (!m.release) {
+    put_u16(&f.data[1], static_cast<std::uint16_t>(
+                            scale_clamped(m.speed_rpm, kSpeedRpmPerBit, 0.0, kRawMax16)));
+  }
   const std::uint8_t counter = m.counter & 0x0F;
   f.data[7] = static_cast<std::uint8_t>((checksum4(f.data, counter, f.can_id & CAN_EFF_MASK) << 4) |
                                         counter);
@@ -154,22 +192,28 @@ LinkResult<Tsc1> decode_tsc1(const can_frame& f, std::optional<std::uint8_t> pre
   if (auto r = check_sum_and_counter(f, kPgnTsc1, counter, f.data[7] >> 4, previous_counter); !r) {
     return r.error();
   }
-  if ((f.data[0] & 0x03) != 0x01) {
-    return codec_error(
-        LinkErrorKind::kProtocol, kPgnTsc1,
-        "override mode " + std::to_string(f.data[0] & 0x03) + ", expected 1 (speed control)");
+  const int mode = f.data[0] & 0x03;
+  if (mode == 0x00) return Tsc1{0.0, counter, true};
+  if (mode != 0x01) {
+    return codec_error(LinkErrorKind::kProtocol, kPgnTsc1,
+                       "override mode " + std::to_string(mode) +
+                           ", expected 1 (speed control) or 0 (no override)");
   }
-  return Tsc1{get_u16(&f.data[1]) * kSpeedRpmPerBit, counter};
+  const std::uint16_t raw = get_u16(&f.data[1]);
+  if (raw > kRawMax16) {
+    return codec_error(LinkErrorKind::kProtocol, kPgnTsc1, "requested speed not available");
+  }
+  return Tsc1{raw * kSpeedRpmPerBit, counter, false};
 }
 
 // ---- EEC1 ----------------------------------------------------------------------------------
 
 can_frame encode_eec1(const Eec1& m, std::uint8_t source) {
-  can_frame f = blank_frame(Id{3, kPgnEec1, source, kGlobalAddress});
+  can_frame f = blank_frame(Id{kPriorityControl, kPgnEec1, source, kGlobalAddress});
   f.data[2] = static_cast<std::uint8_t>(scale_clamped(m.actual_torque_pct, 1.0, -125.0, 250));
   put_u16(&f.data[3],
           static_cast<std::uint16_t>(scale_clamped(m.speed_rpm, kSpeedRpmPerBit, 0.0, kRawMax16)));
-  f.data[5] = source;
+  f.data[5] = m.controlling_address;
   return f;
 }
 
@@ -179,13 +223,13 @@ LinkResult<Eec1> decode_eec1(const can_frame& f) {
   if (raw > kRawMax16) {
     return codec_error(LinkErrorKind::kProtocol, kPgnEec1, "engine speed not available");
   }
-  return Eec1{raw * kSpeedRpmPerBit, f.data[2] <= 250 ? f.data[2] - 125.0 : 0.0};
+  return Eec1{raw * kSpeedRpmPerBit, f.data[2] <= 250 ? f.data[2] - 125.0 : 0.0, f.data[5]};
 }
 
 // ---- GTACP ---------------------------------------------------------------------------------
 
 can_frame encode_gtacp(const Gtacp& m, std::uint8_t source) {
-  can_frame f = blank_frame(Id{3, kPgnGtacp, source, kGlobalAddress});
+  can_frame f = blank_frame(Id{kPriorityData, kPgnGtacp, source, kGlobalAddress});
   put_u32(&f.data[0], scale_clamped(m.real_power_w, 1.0, kPowerOffsetW, kRawMax32));
   put_u32(&f.data[4], scale_clamped(m.reactive_power_var, 1.0, kPowerOffsetW, kRawMax32));
   return f;
@@ -204,9 +248,10 @@ LinkResult<Gtacp> decode_gtacp(const can_frame& f) {
 // ---- 0xFF50 rig command --------------------------------------------------------------------
 
 can_frame encode_rig_command(const RigCommand& m, std::uint8_t source) {
-  can_frame f = blank_frame(Id{3, kPgnRigCommand, source, kGlobalAddress});
-  put_u16(&f.data[0], static_cast<std::uint16_t>(quantise_bias(m.bias_pct)));
-  f.data[2] = static_cast<std::uint8_t>(0xFE | (m.enable ? 1 : 0));
+  can_frame f = blank_frame(Id{kPriorityControl, kPgnRigCommand, source, kGlobalAddress});
+  put_u16(&f.data[0], encode_bias(m.bias_pct));
+  const std::uint8_t state = m.keep_enable ? kStateDontCare : (m.enable ? kStateOn : kStateOff);
+  f.data[2] = static_cast<std::uint8_t>(0xFC | state);
   seal_high_counter(f, m.counter);
   return f;
 }
@@ -220,14 +265,19 @@ LinkResult<RigCommand> decode_rig_command(const can_frame& f,
       !r) {
     return r.error();
   }
-  const auto raw = static_cast<std::int16_t>(get_u16(&f.data[0]));
-  return RigCommand{bias_from_raw(raw), (f.data[2] & 0x01) != 0, counter};
+  auto bias = bias_field(f, 0, kPgnRigCommand, "bias");
+  if (!bias) return bias.error();
+  const std::uint8_t state = f.data[2] & 0x03;
+  if (state == kStateError) {
+    return codec_error(LinkErrorKind::kProtocol, kPgnRigCommand, "enable state 10 (error)");
+  }
+  return RigCommand{*bias, state == kStateOn, counter, state == kStateDontCare};
 }
 
 // ---- 0xFF51 plant sample -------------------------------------------------------------------
 
 can_frame encode_plant_sample(const PlantSample& m, std::uint8_t source) {
-  can_frame f = blank_frame(Id{3, kPgnPlantSample, source, kGlobalAddress});
+  can_frame f = blank_frame(Id{kPriorityData, kPgnPlantSample, source, kGlobalAddress});
   put_u32(&f.data[0], scale_clamped(m.power_w, 1.0, kPowerOffsetW, kRawMax32));
   put_u16(&f.data[4], m.counter);
   f.data[6] = m.status;
@@ -257,7 +307,7 @@ LinkResult<PlantSample> decode_plant_sample(const can_frame& f) {
 // ---- 0xFF52 lockstep -----------------------------------------------------------------------
 
 can_frame encode_lockstep(const Lockstep& m, std::uint8_t source) {
-  can_frame f = blank_frame(Id{3, kPgnLockstep, source, kGlobalAddress});
+  can_frame f = blank_frame(Id{kPriorityData, kPgnLockstep, source, kGlobalAddress});
   put_u16(&f.data[0], m.ticks);
   return f;
 }
@@ -265,6 +315,31 @@ can_frame encode_lockstep(const Lockstep& m, std::uint8_t source) {
 LinkResult<Lockstep> decode_lockstep(const can_frame& f) {
   if (auto r = check_frame(f, kPgnLockstep); !r) return r.error();
   return Lockstep{get_u16(&f.data[0])};
+}
+
+// ---- 0xFF53 bias echo ----------------------------------------------------------------------
+
+can_frame encode_bias_echo(const BiasEcho& m, std::uint8_t source) {
+  can_frame f = blank_frame(Id{kPriorityData, kPgnBiasEcho, source, kGlobalAddress});
+  put_u16(&f.data[0], encode_bias(m.applied_pct));
+  put_u16(&f.data[2], encode_bias(m.received_pct));
+  put_u16(&f.data[4], m.sample_counter);
+  f.data[6] = m.status;
+  seal_high_counter(f, m.command_counter);
+  return f;
+}
+
+LinkResult<BiasEcho> decode_bias_echo(const can_frame& f) {
+  if (auto r = check_frame(f, kPgnBiasEcho); !r) return r.error();
+  const std::uint8_t counter = f.data[7] >> 4;
+  if (auto r = check_sum_and_counter(f, kPgnBiasEcho, counter, f.data[7] & 0x0F, {}); !r) {
+    return r.error();
+  }
+  auto applied = bias_field(f, 0, kPgnBiasEcho, "bias applied");
+  if (!applied) return applied.error();
+  auto received = bias_field(f, 2, kPgnBiasEcho, "bias received");
+  if (!received) return received.error();
+  return BiasEcho{*applied, *received, get_u16(&f.data[4]), f.data[6], counter};
 }
 
 }  // namespace drivers::j1939

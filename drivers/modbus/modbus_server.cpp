@@ -52,11 +52,6 @@ ModbusRequest decode_request(const std::uint8_t* buffer, int length, int header_
       count = be16(pdu + 3);
       values_at = 6;
       break;
-    case MODBUS_FC_WRITE_AND_READ_REGISTERS:
-      r.write_address = be16(pdu + 5);
-      count = be16(pdu + 7);
-      values_at = 10;
-      break;
     default:
       return r;
   }
@@ -68,6 +63,10 @@ ModbusRequest decode_request(const std::uint8_t* buffer, int length, int header_
   for (int i = 0; i < count; ++i) r.values[i] = be16(pdu + values_at + 2 * i);
   r.write_in_range = r.write_address + count <= holding_count;
   return r;
+}
+
+bool ModbusServerOptions::serves(int function) const {
+  return std::find(functions.begin(), functions.end(), function) != functions.end();
 }
 
 ModbusServer::ModbusServer(modbus_t* ctx, modbus_mapping_t* mapping, ModbusServerOptions options)
@@ -221,12 +220,19 @@ bool ModbusServer::serve_client(Client& client, const Hook& before_reply) {
   return true;
 }
 
+// A failed send shows up as a closed socket (TCP) or is the master's timeout (RTU).
 void ModbusServer::answer(const std::uint8_t* adu, int length, const Hook& before_reply) {
   const int header = modbus_get_header_length(ctx_);
+  ++counters_.requests;
+  if (!options_.serves(adu[header])) {
+    if (!(rtu_ && adu[header - 1] == MODBUS_BROADCAST_ADDRESS)) {
+      modbus_reply_exception(ctx_, adu, MODBUS_EXCEPTION_ILLEGAL_FUNCTION);
+    }
+    return;
+  }
   const ModbusRequest request = decode_request(adu, length, header, options_.holding_count);
   if (before_reply) before_reply(request, *mapping_);
-  ++counters_.requests;
-  modbus_reply(ctx_, adu, length, mapping_);  // a failed send shows up as a closed socket
+  modbus_reply(ctx_, adu, length, mapping_);
 }
 
 LinkResult<void> ModbusServer::poll_rtu(std::chrono::milliseconds timeout,

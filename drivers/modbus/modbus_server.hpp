@@ -1,8 +1,12 @@
 // A Modbus server (slave) built on libmodbus: TCP with several clients on one select() loop,
 // or RTU on a serial device. The register map is one modbus_mapping_t (holding and input
 // registers, sized from drivers/modbus/register_map.hpp by the caller); libmodbus's
-// modbus_reply() answers reads, writes and the exceptions (illegal function 01, illegal data
-// address 02, illegal data value 03).
+// modbus_reply() answers reads, writes and the exceptions illegal data address 02 and illegal
+// data value 03. Only the function codes in ModbusServerOptions::functions are served (the
+// documented map: 03, 04, 06, 16); every other code is answered here with exception 01
+// (illegal function) and acts on nothing. libmodbus alone would serve 0x16/0x17 (writing
+// holding registers past the map's rules) and leave 07 unanswered (the client times out).
+// RTU broadcasts (unit 0) are never answered, as Modbus requires.
 //
 // TCP framing is done here on non-blocking per-connection buffers (the MBAP length field says
 // how long the ADU is) instead of modbus_receive(), whose byte timeout would let one slow or
@@ -27,7 +31,7 @@
 
 namespace drivers {
 
-// A decoded request. For writes (function 06, 16, 23) `values` holds the registers written
+// A decoded request. For writes (function 06, 16) `values` holds the registers written
 // starting at `write_address`; `write_in_range` says whether that span fits the map (if not,
 // libmodbus answers exception 02 and nothing is written).
 struct ModbusRequest {
@@ -53,6 +57,11 @@ struct ModbusServerOptions {
   int unit = 1;          // RTU: requests for other units are ignored; TCP: any unit answered
   int max_clients = 16;  // TCP
   bool debug = false;    // libmodbus frame trace on stderr
+  // Function codes served; any other is answered with exception 01 (illegal function).
+  std::vector<std::uint8_t> functions = {
+      MODBUS_FC_READ_HOLDING_REGISTERS, MODBUS_FC_READ_INPUT_REGISTERS,
+      MODBUS_FC_WRITE_SINGLE_REGISTER, MODBUS_FC_WRITE_MULTIPLE_REGISTERS};
+  bool serves(int function) const;
 };
 
 class ModbusServer {

@@ -26,6 +26,7 @@ class GensetPlant : public Plant {
   std::chrono::nanoseconds tick() const override { return tick_; }
   std::uint64_t ticks() const override { return ticks_; }
   double rated_power_w() const override { return model_.params()[P::kRatedKw] * 1e3; }
+  double external_bias_limit_pct() const override { return model_.params()[P::kGovExtBiasLimit]; }
 
   // Beyond the Plant interface (tests, benchmarks, linearisation checks).
   double time_s() const { return solver_->time(); }

@@ -37,6 +37,7 @@ namespace plantsim {
   X(kGovRate, "gov.rate_limit_pu_s", "pu/s", 0.0, 0.0, 100.0, "actuator rate limit (0 off)") \
   X(kGovDeadband, "gov.deadband_pu", "pu", 0.0, 0.0, 0.5, "deadband on e (0 off)") \
   X(kGovBacklash, "gov.backlash_pu", "pu", 0.0, 0.0, 0.5, "rack backlash width (0 off)") \
+  X(kGovExtBiasLimit, "gov.ext_bias_limit_pct", "%", 5.0, 0.0, 32.0, "clamp on the external bias (applied, echoed)") \
   X(kEngRpm, "engine.rpm", "rpm", 600.0, 60.0, 3000.0, "rated speed N") \
   X(kEngCylinders, "engine.cylinders", "1", 12.0, 1.0, 20.0, "cylinders (four-stroke)") \
   X(kEngDeadTime, "engine.dead_time_s", "s", 0.0, 0.0, 1.0, "fuel dead time; 0 = 30/N + 60/(n_cyl N)") \

@@ -44,6 +44,10 @@ class Plant {
   virtual std::chrono::nanoseconds tick() const = 0;
   virtual std::uint64_t ticks() const = 0;  // ticks taken so far
   virtual double rated_power_w() const = 0;
+  // The governor's clamp on the external bias, % of rated power (parameter
+  // gov.ext_bias_limit_pct): the serving layer applies and echoes at most this much.
+  virtual double external_bias_limit_pct() const { return kDefaultExternalBiasLimitPct; }
+  static constexpr double kDefaultExternalBiasLimitPct = 5.0;
 };
 
 struct PlantOptions {

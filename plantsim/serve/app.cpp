@@ -65,7 +65,8 @@ void print_summary(const Running& r) {
   }
   if (r.can) {
     const auto c = r.can->counters();
-    line += fmt::format("; can {} frames in, {} rejected", c.received, c.rejected());
+    line += fmt::format("; can {} frames in, {} rejected ({} from another source address)",
+                        c.received, c.rejected(), c.wrong_source);
   }
   std::cerr << line << "\n";
 }
@@ -82,7 +83,7 @@ bool open_endpoints(const ServeOptions& o, Running& r) {
     r.modbus = std::move(node.value());
   }
   if (o.can) {
-    auto node = CanNode::open(parse_can_endpoint(*o.can), *r.governor, o.clock);
+    auto node = CanNode::open(parse_can_endpoint(*o.can), *r.governor, o.clock, o.can_node);
     if (!node) {
       std::cerr << "plantsim: --can " << node.error().where << ": " << node.error().detail << "\n";
       return false;

@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "plantsim/plant/plant.hpp"
+#include "plantsim/serve/can_node.hpp"
 #include "plantsim/serve/modbus_node.hpp"
 #include "plantsim/serve/serve_faults.hpp"
 
@@ -34,6 +35,7 @@ struct ServeOptions {
   std::vector<ServeFaultChange> serve_faults;  // --fault serve.* (serve_faults.hpp)
   std::optional<std::string> modbus;  // endpoint text; default tcp://127.0.0.1:1502 if no --can
   std::optional<std::string> can;
+  CanNodeOptions can_node;  // --can-rig-address, --can-sample-period
   ClockMode clock = ClockMode::kRealtime;
   std::optional<double> duration_s;  // stop at this plant time
   bool readout = false;

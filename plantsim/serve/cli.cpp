@@ -11,19 +11,35 @@
 namespace plantsim::serve {
 namespace {
 
-void add_options(CLI::App& app, ServeOptions& o, std::string& clock, std::string& tick) {
+// Options CLI11 stores as text; validate() turns them into ServeOptions.
+struct TextOptions {
+  std::string clock = "realtime";
+  std::string tick = "1ms";
+  std::string rig_address = "0xF9";
+  std::string sample_period = "command";
+};
+
+void add_options(CLI::App& app, ServeOptions& o, TextOptions& t) {
   app.add_option("--preset", o.plant.preset, "Plant preset")->default_str("stornoway");
   app.add_option("--config", o.plant.config, "Plant TOML (overrides --preset)");
   app.add_option("--modbus", o.modbus,
                  "Modbus endpoint: tcp://HOST:PORT (port 0 = ephemeral) or "
                  "rtu:DEVICE?baud=19200[&parity=N][&unit=1] (default tcp://127.0.0.1:1502)");
   app.add_option("--can", o.can, "CAN endpoint: udp://HOST:PORT or socketcan:IFACE");
-  app.add_option("--clock", clock,
+  app.add_option("--clock", t.clock,
                  "realtime (plant follows the monotonic clock) or lockstep "
                  "(plant advances only when the rig writes holding 100 / "
                  "sends PGN 0xFF52)")
       ->default_str("realtime");
-  app.add_option("--tick", tick, "Plant tick, e.g. 1ms, 500us")->default_str("1ms");
+  app.add_option("--tick", t.tick, "Plant tick, e.g. 1ms, 500us")->default_str("1ms");
+  app.add_option("--can-rig-address", t.rig_address,
+                 "CAN: the only source address whose commands (0xFF50, TSC1, 0xFF52) the "
+                 "governor accepts, 0-253 (0x.. for hex)")
+      ->default_str("0xF9");
+  app.add_option("--can-sample-period", t.sample_period,
+                 "CAN, realtime: send PGN 0xFF51 every PERIOD of plant time (e.g. 10ms), or "
+                 "'command' to answer each accepted command (lockstep: one per 0xFF52)")
+      ->default_str("command");
   app.add_option("--fault", o.plant.faults,
                  "Parameter change NAME=VALUE@t=SECONDS (plant time, repeatable); interface "
                  "faults serve.freeze_counter, serve.nan_power, serve.drop_link =1 (on) or 0 "
@@ -45,8 +61,35 @@ void add_options(CLI::App& app, ServeOptions& o, std::string& clock, std::string
                "ranges, and exit");
 }
 
+std::uint8_t parse_rig_address(const std::string& text) {
+  std::size_t used = 0;
+  unsigned long v = 0;
+  try {
+    v = std::stoul(text, &used, 0);
+  } catch (const std::exception&) {
+    used = 0;
+  }
+  if (used == 0 || used != text.size() || v > 253) {
+    throw ConfigError(fmt::format(
+        "--can-rig-address '{}': expected a J1939 source address 0-253 (e.g. 0xF9)", text));
+  }
+  return static_cast<std::uint8_t>(v);
+}
+
+std::chrono::nanoseconds parse_sample_period(const std::string& text) {
+  if (text == "command") return std::chrono::nanoseconds(0);
+  try {
+    return parse_tick(text);
+  } catch (const ConfigError&) {
+    throw ConfigError(fmt::format(
+        "--can-sample-period '{}': expected 'command' or a period such as 10ms (100us .. 1s)",
+        text));
+  }
+}
+
 // Checks that CLI11 cannot express, each with a one-line message.
-void validate(ServeOptions& o, const std::string& clock, const std::string& tick) {
+void validate(ServeOptions& o, const TextOptions& t) {
+  const std::string& clock = t.clock;
   if (clock == "realtime") {
     o.clock = ClockMode::kRealtime;
   } else if (clock == "lockstep") {
@@ -54,7 +97,9 @@ void validate(ServeOptions& o, const std::string& clock, const std::string& tick
   } else {
     throw ConfigError(fmt::format("--clock '{}': expected realtime or lockstep", clock));
   }
-  o.plant.tick = parse_tick(tick);
+  o.can_node.rig_address = parse_rig_address(t.rig_address);
+  o.can_node.sample_period = parse_sample_period(t.sample_period);
+  o.plant.tick = parse_tick(t.tick);
   o.serve_faults = split_serve_faults(o.plant.faults);
   if (o.duration_s && !(*o.duration_s > 0.0 && *o.duration_s < 1e7)) {
     throw ConfigError(fmt::format("--duration {}: expected seconds > 0", *o.duration_s));
@@ -74,9 +119,8 @@ int plantsim_main(int argc, char** argv, const PlantHooks& hooks) {
       "plantsim: emulated governor / diesel engine / alternator plant serving the "
       "rig's Modbus and CAN maps"};
   ServeOptions options;
-  std::string clock = "realtime";
-  std::string tick = "1ms";
-  add_options(app, options, clock, tick);
+  TextOptions text;
+  add_options(app, options, text);
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {
@@ -86,7 +130,7 @@ int plantsim_main(int argc, char** argv, const PlantHooks& hooks) {
     return 2;
   }
   try {
-    validate(options, clock, tick);
+    validate(options, text);
   } catch (const ConfigError& e) {
     std::cerr << "plantsim: " << e.what() << "\n";
     return 2;

@@ -66,7 +66,8 @@ void Governor::tick_locked() {
   const auto t_end = snapshot_.plant_time + tick_period_;
   const bool lost = !alive_at_ || (t_end - *alive_at_) > options_.heartbeat_timeout;
   const bool active = enabled_ && !lost;
-  const double applied = active ? requested_pct_ : 0.0;
+  const double limit = std::min(options_.bias_limit_pct, plant_->external_bias_limit_pct());
+  const double applied = active ? std::clamp(requested_pct_, -limit, limit) : 0.0;
   plant_->set_bias_pct(applied);
   plant_->step();
   snapshot_.heartbeat_lost = lost;

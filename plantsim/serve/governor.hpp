@@ -13,6 +13,9 @@
 //    Loss is not latched: the next heartbeat change re-applies the (freshly written) bias.
 //    Until the first heartbeat the governor reports heartbeat lost.
 //  * Commands received between ticks take effect at the next tick.
+//  * Clamp: the applied bias is limited to +-min(GovernorOptions::bias_limit_pct,
+//    Plant::external_bias_limit_pct()) (plant parameter gov.ext_bias_limit_pct, default 5 % of
+//    rated, read at every tick so a --fault can change it); the echo reports the clamped value.
 //
 // Thread-safe: the clock thread ticks while the transport threads write and read.
 #pragma once
@@ -37,8 +40,8 @@ enum class CommandSource { kModbus = 0, kCan = 1, kTsc1 = 2 };
 // The governor's outputs after a tick, ready for any transport to encode.
 struct GovernorSnapshot {
   Measurement measurement;
-  double bias_applied_pct = 0.0;  // what the governor applies (0 when disabled or lost)
-  double bias_requested_pct = 0.0;
+  double bias_applied_pct = 0.0;    // what the governor applies (0 when disabled or lost; clamped)
+  double bias_requested_pct = 0.0;  // as received (transport range only)
   bool enabled = false;
   bool heartbeat_lost = true;
   std::uint16_t status = 0;  // drivers::StatusBit flags
@@ -57,7 +60,9 @@ struct GovernorSnapshot {
 
 struct GovernorOptions {
   std::chrono::milliseconds heartbeat_timeout{500};
-  double bias_limit_pct = 32.767;  // what int16 at 0.001 %/bit can carry
+  // Transport range (int16 at 0.001 %/bit); the governor's own clamp is the plant's
+  // external_bias_limit_pct() and the smaller of the two applies.
+  double bias_limit_pct = 32.767;
 };
 
 class Governor {

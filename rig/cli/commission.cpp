@@ -14,7 +14,8 @@ void add_session_options(CLI::App& cmd, SessionArgs& a) {
   cmd.add_option("--link", a.link, "Governor link URI, e.g. modbus+tcp://10.0.0.5:502?unit=1");
   cmd.add_option("--test", a.test_file, "Test file (TOML, see docs/test-file.md)")
       ->check(CLI::ExistingFile);
-  cmd.add_option("--out", a.out_dir, "Output folder")->required();
+  cmd.add_option("--out", a.out_dir, "Output folder (must be new or empty, see --force)")
+      ->required();
   cmd.add_flag("--emulate", a.emulate, "Start plantsim (see --clock) and test against it");
   cmd.add_option("--preset", a.preset, "Emulated plant preset")->default_str("stornoway");
   cmd.add_option("--seed", a.seed, "Emulated plant noise seed")->default_str("1");
@@ -28,6 +29,7 @@ void add_session_options(CLI::App& cmd, SessionArgs& a) {
   cmd.add_option("--fault", a.faults, "Emulated plant fault NAME=VALUE@t=SECONDS (repeatable)");
   cmd.add_flag("--json", a.json, "Print report.json on stdout instead of the summary");
   cmd.add_flag("--quiet", a.quiet, "No live view");
+  cmd.add_flag("--force", a.force, "Clear a non-empty --out folder first (an earlier run's files)");
 }
 
 void add_commission_command(CLI::App& app) {

@@ -35,12 +35,13 @@ constexpr double kLockstepMinTimeoutS = 5.0;
 
 void print_summary(const session::SessionData& d, const std::filesystem::path& out) {
   fmt::print("rig {}: {}\n", d.command, d.outcome);
-  if (d.mmfm && d.mmfm->derived.valid) {
-    const auto& g = d.mmfm->derived;
+  if (d.excitation.mmfm && d.excitation.mmfm->derived.valid) {
+    const auto& g = d.excitation.mmfm->derived;
     fmt::print(
         "  MMFM: K {:.2f}+-{:.2f} kW/%  fn {:.3f}+-{:.3f} Hz  zeta {:.3f}+-{:.3f}  "
         "Td {:.1f} ms\n",
-        g.gain, g.gain_std, g.fn_hz, g.fn_hz_std, g.zeta, g.zeta_std, 1e3 * d.mmfm->delay_s);
+        g.gain, g.gain_std, g.fn_hz, g.fn_hz_std, g.zeta, g.zeta_std,
+        1e3 * d.excitation.mmfm->delay_s);
   }
   if (d.compare_sweep) fmt::print("  vs swept sine: {}\n", d.compare_sweep->summary);
   if (d.compare_h1) fmt::print("  vs H1: {}\n", d.compare_h1->summary);

@@ -52,7 +52,7 @@ double pilot_gain_rms(const PilotEstimate& pilot);
 double prior_gain_rms(const std::function<double(double freq_hz)>& magnitude, double bandwidth_hz);
 
 // Plans the excitation rms for the gain and the measured noise rms. Infeasible (not thrown)
-// when the noise alone fills the planned band; the sequencer then refuses to excite.
+// when the noise alone fills the planned band; the pilot phase then refuses to excite.
 AmplitudePlan plan_excitation(double gain_rms, double noise_rms_kw,
                               const AmplitudePlanOptions& options);
 

@@ -3,12 +3,15 @@
 #include <fmt/format.h>
 
 #include <chrono>
+#include <memory>
 #include <optional>
+#include <vector>
 
+#include "drivers/can/can_link.hpp"
 #include "drivers/open_link.hpp"
 #include "rig/io/recording_writer.hpp"
 #include "rig/session/live_view.hpp"
-#include "rig/session/sequencer.hpp"
+#include "rig/session/phase.hpp"
 #include "rig/session/session_outputs.hpp"
 
 namespace rig::session {
@@ -42,17 +45,43 @@ io::Sidecar recording_sidecar(const SessionData& d) {
   return s;
 }
 
-// Phases in order; each returns false when the test must stop. True when the comparison is
-// due (after the ramp-down: nothing is written to the governor while it runs).
-bool run_phases(Sequencer& seq, bool sweep_only) {
-  if (!seq.steady_state() || !seq.activate()) return false;
-  if (!seq.pilot()) return false;
-  if (sweep_only) {
-    seq.sweep();
-    return false;
+// The phases of the test in order; `rig sweep` has no excitation and no comparison.
+std::vector<std::unique_ptr<SessionPhase>> test_phases(bool sweep_only) {
+  std::vector<std::unique_ptr<SessionPhase>> phases;
+  phases.push_back(make_steady_state_phase());
+  phases.push_back(make_activate_phase());
+  phases.push_back(make_pilot_phase());
+  if (!sweep_only) phases.push_back(make_excite_phase());
+  phases.push_back(make_sweep_phase());
+  return phases;
+}
+
+// The one loop: the phases until one stops the test, then always the ramp-down; the
+// comparison only after a complete commissioning test.
+void drive(RunContext& ctx, bool sweep_only) {
+  bool complete = true;
+  for (auto& phase : test_phases(sweep_only)) {
+    if (!phase->run(ctx)) {
+      complete = false;
+      break;
+    }
   }
-  if (!seq.excite()) return false;
-  return seq.sweep();
+  make_deactivate_phase()->run(ctx);
+  if (complete && !sweep_only) make_compare_phase()->run(ctx);
+}
+
+// The loop's record, for the report.
+void collect(SessionData& data, const TickLoop& loop) {
+  data.events = loop.events();
+  data.trace = loop.trace();
+  data.max_abs_deviation_pct = loop.max_abs_deviation_pct();
+  data.test_time_s = loop.t_s();
+  data.loop_timing = loop.timing().summary();
+  if (data.outcome.empty()) {
+    data.outcome = data.command == "sweep" ? std::string("swept sine complete")
+                   : data.compare_sweep    ? data.compare_sweep->summary
+                                           : std::string("test complete (no swept-sine check)");
+  }
 }
 
 SessionData new_session_data(const TestConfig& config, const SessionOptions& options) {
@@ -121,10 +150,9 @@ SessionData run_commission(const TestConfig& config, const SessionOptions& optio
   // At most 10 refreshes (terminal) or one plain line per wall-clock second.
   const bool tty = LiveView::is_terminal(options.live_out);
   LiveView view(options.live_out, tty, config.output.live_interval_s, tty ? 0.1 : 1.0);
-  Sequencer seq(data, link, *recorder, view, options);
-  const bool compare_due = run_phases(seq, options.command == "sweep");
-  seq.finish();  // ramp-down and enable cleared, whatever happened
-  if (compare_due) seq.compare();
+  RunContext ctx(data, link, *recorder, view, options);
+  for (const auto& w : drivers::link_warnings(link)) ctx.loop.event("warning", w);
+  drive(ctx, options.command == "sweep");
   view.finish();
   try {
     recorder->close();
@@ -134,18 +162,9 @@ SessionData run_commission(const TestConfig& config, const SessionOptions& optio
       data.outcome = std::string("rig failure: cannot write the recording: ") + e.what();
     }
   }
-  data.events = seq.loop().events();
-  data.trace = seq.loop().trace();
-  data.max_abs_deviation_pct = seq.loop().max_abs_deviation_pct();
-  data.test_time_s = seq.loop().t_s();
-  data.loop_timing = seq.loop().timing().summary();
+  collect(data, ctx.loop);
   data.wall_time_s =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
-  if (data.outcome.empty()) {
-    data.outcome = data.command == "sweep" ? std::string("swept sine complete")
-                   : data.compare_sweep    ? data.compare_sweep->summary
-                                           : std::string("test complete (no swept-sine check)");
-  }
   finish_outputs(data, options.out_dir);
   return data;
 }

@@ -49,28 +49,44 @@ struct RampDownResult {
   std::string error;       // why it could not, when !cleared
 };
 
-// Everything the report is made of.
+// The activation (DESIGN.md section 8, layer 0).
+struct ActivationResult {
+  bool acknowledged = false;  // the governor reported the bias active with a live heartbeat
+  std::uint16_t status = 0;   // the last status read
+  double waited_s = 0.0;
+};
+
+// The excitation phase with online MMFM.
+struct ExcitationResult {
+  double planned_std_pct = 0.0;  // from the pilot's amplitude plan
+  double applied_std_pct = 0.0;  // measured std of u over the excitation (after supervisor)
+  double duration_s = 0.0;
+  std::string stop_reason;                 // why the excitation stopped
+  std::vector<std::string> quality_flags;  // fatal data-quality findings
+  std::vector<BlockEstimate> history;      // one live estimate per block
+  std::optional<ident::MmfmResult> mmfm;   // the final estimate
+  std::string mmfm_error;
+  signal::Correlation ruu, ryu;   // online correlations (AC-coupled)
+  std::vector<fra::FrfPoint> h1;  // noise-driven FRF of the excitation record
+};
+
+// Everything the report is made of: the run, one result per phase, the loop's record and the
+// outcome.
 struct SessionData {
   TestConfig config;
   std::string link_uri;
   std::string command;
   std::string preset;
   std::optional<std::uint64_t> plant_seed;
+
   std::optional<SteadyStateResult> steady;
+  std::optional<ActivationResult> activation;
   std::optional<PilotResult> pilot;
-  double excitation_sigma_pct = 0.0;
-  double excitation_s = 0.0;
-  double applied_std_pct = 0.0;  // measured std of u over the excitation (after supervisor)
-  std::vector<std::string> quality_flags;  // fatal data-quality findings on the excitation
-  std::string model_rejected;  // why the data do not support a model (then none is written)
+  ExcitationResult excitation;
+  std::vector<fra::FrfPoint> sweep;  // the swept-sine FRF
   RampDownResult ramp_down;
-  std::string stop_reason;  // why the excitation stopped
-  std::vector<BlockEstimate> history;
-  std::optional<ident::MmfmResult> mmfm;
-  std::string mmfm_error;
-  signal::Correlation ruu, ryu;  // online correlations (AC-coupled)
-  std::vector<fra::FrfPoint> sweep, h1;
   std::optional<fra::CompareResult> compare_sweep, compare_h1;
+
   std::vector<Event> events;
   std::optional<TripRecord> trip;
   TickLoop::Trace trace;
@@ -78,8 +94,10 @@ struct SessionData {
   double test_time_s = 0.0;  // plant/test time
   double wall_time_s = 0.0;
   std::optional<LoopTimingSummary> loop_timing;  // when the tick loop ran
+
   int exit_code = kExitOk;
-  std::string outcome;  // one line
+  std::string outcome;         // one line
+  std::string model_rejected;  // why the data do not support a model (then none is written)
 };
 
 // Runs the whole test and writes every output file into options.out_dir (which

@@ -166,23 +166,24 @@ json report_json(const SessionData& d) {
                   {"band_kw", d.pilot->band_kw},
                   {"limited_by_clamp", d.pilot->limited_by_clamp}};
   }
-  j["excitation"] = {{"std_pct", d.excitation_sigma_pct},
-                     {"planned_std_pct", d.excitation_sigma_pct},
-                     {"applied_std_pct", d.applied_std_pct},
-                     {"applied_fraction", d.excitation_sigma_pct > 0.0
-                                              ? json(d.applied_std_pct / d.excitation_sigma_pct)
-                                              : json(nullptr)},
-                     {"duration_s", d.excitation_s},
-                     {"stop_reason", d.stop_reason},
-                     {"quality_flags", d.quality_flags}};
-  j["model_written"] = d.mmfm.has_value() && d.exit_code == kExitOk;
+  j["excitation"] = {
+      {"std_pct", d.excitation.planned_std_pct},
+      {"planned_std_pct", d.excitation.planned_std_pct},
+      {"applied_std_pct", d.excitation.applied_std_pct},
+      {"applied_fraction", d.excitation.planned_std_pct > 0.0
+                               ? json(d.excitation.applied_std_pct / d.excitation.planned_std_pct)
+                               : json(nullptr)},
+      {"duration_s", d.excitation.duration_s},
+      {"stop_reason", d.excitation.stop_reason},
+      {"quality_flags", d.excitation.quality_flags}};
+  j["model_written"] = d.excitation.mmfm.has_value() && d.exit_code == kExitOk;
   j["model_rejected"] = d.model_rejected;
   j["ramp_down"] = {{"attempted", d.ramp_down.attempted},
                     {"cleared", d.ramp_down.cleared},
                     {"reconnects", d.ramp_down.reconnects},
                     {"error", d.ramp_down.error}};
-  if (d.mmfm) {
-    const auto& m = *d.mmfm;
+  if (d.excitation.mmfm) {
+    const auto& m = *d.excitation.mmfm;
     j["mmfm"] = {{"num", report::to_json_array(m.model.num)},
                  {"den", report::to_json_array(m.model.den)},
                  {"delay_s", m.delay_s},
@@ -194,8 +195,8 @@ json report_json(const SessionData& d) {
   } else {
     j["mmfm"] = nullptr;
   }
-  j["mmfm_error"] = d.mmfm_error;
-  j["history"] = history_json(d.history);
+  j["mmfm_error"] = d.excitation.mmfm_error;
+  j["history"] = history_json(d.excitation.history);
   j["sweep"] = frf_json(d.sweep);
   j["compare"] = {{"sweep", compare_json(d.compare_sweep)}, {"h1", compare_json(d.compare_h1)}};
   j["safety"] = {{"band_pct", d.config.safety.band_pct},
@@ -250,15 +251,15 @@ bool write_outputs(const SessionData& d, const std::filesystem::path& out) {
   std::error_code ec;
   std::filesystem::create_directories(out, ec);
   // A model only from a run that passed: a failed run writes none (DESIGN.md section 8).
-  if (d.mmfm && d.exit_code == kExitOk) {
+  if (d.excitation.mmfm && d.exit_code == kExitOk) {
     attempt("model.json", [&] {
       io::ModelFile m;
-      m.tf = d.mmfm->model;
-      m.tf.delay_s = d.mmfm->delay_s;
+      m.tf = d.excitation.mmfm->model;
+      m.tf.delay_s = d.excitation.mmfm->delay_s;
       m.input.assign(1, 'u');
       m.output.assign(1, 'y');
       m.units = "kW/%";
-      m.extra["parameters"] = parameters_json(d.mmfm->parameters);
+      m.extra["parameters"] = parameters_json(d.excitation.mmfm->parameters);
       m.extra["method"] = "mmfm";
       // Its dead time refers to the plant: the rig's sample timing (bias held for a sample,
       // power read a sample after the write in lockstep) is taken out (docs/decisions.md).
@@ -268,7 +269,8 @@ bool write_outputs(const SessionData& d, const std::filesystem::path& out) {
   }
   if (!d.sweep.empty())
     attempt("sweep.csv", [&] { io::write_frf(out / "sweep.csv", to_frf(d.sweep)); });
-  if (!d.h1.empty()) attempt("h1.csv", [&] { io::write_frf(out / "h1.csv", to_frf(d.h1)); });
+  if (!d.excitation.h1.empty())
+    attempt("h1.csv", [&] { io::write_frf(out / "h1.csv", to_frf(d.excitation.h1)); });
   bool ok =
       attempt("report.json", [&] { report::write_json_file(out / "report.json", report_json(d)); });
   ok = attempt("report.html", [&] { write_report_html(d, out / "report.html"); }) && ok;

@@ -59,16 +59,17 @@ void summary(report::HtmlReport& page, const SessionData& d) {
     kv.push_back({"pilot", fmt::format("gain {:.1f} kW/%, excitation std {:.3f} %",
                                        d.pilot->gain_kw_per_pct, d.pilot->planned_std_pct)});
   }
-  if (d.excitation_s > 0.0) {
-    kv.push_back({"excitation", fmt::format("{:.0f} s, {}", d.excitation_s, d.stop_reason)});
+  if (d.excitation.duration_s > 0.0) {
+    kv.push_back({"excitation",
+                  fmt::format("{:.0f} s, {}", d.excitation.duration_s, d.excitation.stop_reason)});
   }
-  if (d.mmfm && d.mmfm->derived.valid) {
-    const auto& g = d.mmfm->derived;
-    kv.push_back(
-        {"MMFM model", fmt::format("K {:.2f}+-{:.2f} kW/%, fn {:.3f}+-{:.3f} Hz, "
-                                   "zeta {:.3f}+-{:.3f}, Td {:.1f}+-{:.1f} ms",
-                                   g.gain, g.gain_std, g.fn_hz, g.fn_hz_std, g.zeta, g.zeta_std,
-                                   1e3 * d.mmfm->delay_s, 1e3 * d.mmfm->delay_std_s)});
+  if (d.excitation.mmfm && d.excitation.mmfm->derived.valid) {
+    const auto& g = d.excitation.mmfm->derived;
+    kv.push_back({"MMFM model", fmt::format("K {:.2f}+-{:.2f} kW/%, fn {:.3f}+-{:.3f} Hz, "
+                                            "zeta {:.3f}+-{:.3f}, Td {:.1f}+-{:.1f} ms",
+                                            g.gain, g.gain_std, g.fn_hz, g.fn_hz_std, g.zeta,
+                                            g.zeta_std, 1e3 * d.excitation.mmfm->delay_s,
+                                            1e3 * d.excitation.mmfm->delay_std_s)});
   }
   if (d.compare_sweep) kv.push_back({"MMFM vs swept sine", d.compare_sweep->summary});
   if (d.compare_h1) kv.push_back({"MMFM vs H1", d.compare_h1->summary});
@@ -102,13 +103,13 @@ std::vector<report::Series> phase_series(const std::vector<double>& f,
 }
 
 void bode(report::HtmlReport& page, const SessionData& d) {
-  if (!d.mmfm && d.sweep.empty() && d.h1.empty()) return;
+  if (!d.excitation.mmfm && d.sweep.empty() && d.excitation.h1.empty()) return;
   const double f_lo = std::min(0.1, d.config.sweep.from_hz);
   const double f_hi = std::max(10.0, d.config.sweep.to_hz);
   std::set<double> grid;
   for (double f : report::log_space(f_lo, f_hi, 160)) grid.insert(f);
   for (const auto& p : d.sweep) grid.insert(p.freq_hz);
-  for (const auto& p : d.h1)
+  for (const auto& p : d.excitation.h1)
     if (p.freq_hz >= f_lo && p.freq_hz <= f_hi) grid.insert(p.freq_hz);
   const std::vector<double> f(grid.begin(), grid.end());
   auto measured = [&](const std::vector<fra::FrfPoint>& pts) {
@@ -121,15 +122,15 @@ void bode(report::HtmlReport& page, const SessionData& d) {
     return h;
   };
   std::vector<report::BodeCurve> curves;
-  if (d.mmfm) {
+  if (d.excitation.mmfm) {
     report::BodeCurve m{"MMFM model", {}, {}, {}, false, ""};
-    for (double x : f) m.response.push_back(d.mmfm->model.response(x));
+    for (double x : f) m.response.push_back(d.excitation.mmfm->model.response(x));
     curves.push_back(m);
   }
   if (!d.sweep.empty())
     curves.push_back({"swept sine", measured(d.sweep), {}, {}, true, "#d62728"});
-  if (!d.h1.empty())
-    curves.push_back({"H1 (noise-driven)", measured(d.h1), {}, {}, true, "#2ca02c"});
+  if (!d.excitation.h1.empty())
+    curves.push_back({"H1 (noise-driven)", measured(d.excitation.h1), {}, {}, true, "#2ca02c"});
   auto [mag, phase] = report::bode_charts("Frequency response, kW per % bias", f, curves);
   phase.series = phase_series(f, curves);
   page.section("Frequency response").chart(mag).chart(phase);
@@ -145,23 +146,24 @@ void bode(report::HtmlReport& page, const SessionData& d) {
     coh.series.push_back(s);
   };
   if (!d.sweep.empty()) coherence(d.sweep, "swept sine", "#d62728");
-  if (!d.h1.empty()) coherence(d.h1, "H1", "#2ca02c");
+  if (!d.excitation.h1.empty()) coherence(d.excitation.h1, "H1", "#2ca02c");
   if (!coh.series.empty()) page.chart(coh);
 }
 
 void correlations(report::HtmlReport& page, const SessionData& d) {
-  if (d.ryu.size() == 0 || d.ruu.size() != d.ryu.size()) return;
+  if (d.excitation.ryu.size() == 0 || d.excitation.ruu.size() != d.excitation.ryu.size()) return;
   report::Chart c{
       "Correlation functions (AC-coupled, averaged)", "lag (s)", "", {}, {}, {}, false, false, 280};
   report::Series ruu{"r_uu (%^2)", {}, "", false, false, 1.5};
   report::Series ryu{"r_yu (kW %)", {}, "", false, false, 1.5};
   report::Series model{"model h * r_uu", {}, "", true, false, 1.5};
-  const bool has_model = d.mmfm && d.mmfm->model_ryu.size() == d.ryu.size();
-  for (Eigen::Index i = 0; i < d.ryu.size(); ++i) {
-    c.x.push_back(d.ryu.lag_s(i));
-    ruu.y.push_back(d.ruu.r(i));
-    ryu.y.push_back(d.ryu.r(i));
-    if (has_model) model.y.push_back(d.mmfm->model_ryu.r(i));
+  const bool has_model =
+      d.excitation.mmfm && d.excitation.mmfm->model_ryu.size() == d.excitation.ryu.size();
+  for (Eigen::Index i = 0; i < d.excitation.ryu.size(); ++i) {
+    c.x.push_back(d.excitation.ryu.lag_s(i));
+    ruu.y.push_back(d.excitation.ruu.r(i));
+    ryu.y.push_back(d.excitation.ryu.r(i));
+    if (has_model) model.y.push_back(d.excitation.mmfm->model_ryu.r(i));
   }
   report::Chart a = c;
   a.title = "Auto-correlation of the applied excitation";
@@ -175,7 +177,7 @@ void correlations(report::HtmlReport& page, const SessionData& d) {
 void convergence(report::HtmlReport& page, const SessionData& d) {
   std::vector<const BlockEstimate*> ok;
   // From the third block on: the standard errors need three blocks of spread.
-  for (const auto& e : d.history) {
+  for (const auto& e : d.excitation.history) {
     if (e.ok && e.derived.valid && e.block >= 3) ok.push_back(&e);
   }
   if (ok.empty()) return;

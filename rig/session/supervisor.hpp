@@ -72,7 +72,7 @@ enum class TripCause {
   kNotFinite,       // NaN/Inf power
   kLinkError,       // link read/write failure
   kGovernorStatus,  // status: heartbeat lost, plant fault, not running, bias not active
-  kExternal,        // tripped by the caller (operator abort, sequencer fault)
+  kExternal,        // tripped by the caller (operator abort, a phase's fault)
   kBiasNotApplied,  // the governor's echo does not follow the command (layer 0)
   kImplausible,     // a reading that cannot be true: speed or frequency 0, counter backwards
   kRigFailure,      // the rig itself failed (recording or report write, disk full)

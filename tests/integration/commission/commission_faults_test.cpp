@@ -1,12 +1,11 @@
 // Faults during a commissioning test: the exit code says what happened, the bias is back at
 // baseline, and the recording stays readable. Malformed test files are refused before
 // anything is written.
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 #include <signal.h>
 #include <sys/wait.h>
 #include <unistd.h>
-
-#include <fmt/format.h>
 
 #include <chrono>
 #include <fstream>
@@ -27,7 +26,8 @@ struct Background {
   std::filesystem::path log;
   static Background start(const std::string& cmd, const std::filesystem::path& log) {
     const auto pid_file = log.string() + ".pid";
-    const std::string line = fmt::format("( {} ) > {} 2>&1 & echo $! > {}", cmd, log.string(), pid_file);
+    const std::string line =
+        fmt::format("( {} ) > {} 2>&1 & echo $! > {}", cmd, log.string(), pid_file);
     EXPECT_EQ(std::system(line.c_str()), 0);
     Background b;
     b.log = log;
@@ -54,7 +54,8 @@ std::string start_realtime_plant(const std::filesystem::path& dir, Background& p
   for (int i = 0; i < 100; ++i) {
     std::smatch m;
     const std::string text = read_text(dir / "plantsim.log");
-    if (std::regex_search(text, m, ready)) return "modbus+tcp://127.0.0.1:" + m[1].str() + "?unit=1";
+    if (std::regex_search(text, m, ready))
+      return "modbus+tcp://127.0.0.1:" + m[1].str() + "?unit=1";
     std::this_thread::sleep_for(100ms);
   }
   ADD_FAILURE() << "plantsim did not start: " << read_text(dir / "plantsim.log");
@@ -74,10 +75,10 @@ duration_s = 20.0
 
 TEST(CommissionFaults, GridVoltageDipTripsWithExit4AndBiasAtBaseline) {
   const auto out = fresh_dir("dip");
-  const int code = run_rig("commission --emulate --seed 1 --quiet --fault grid.v_pu=0.85@t=80 --out " +
-                               out.string(),
-                           out / "rig.log");
-  EXPECT_EQ(code, 4) << read_text(out / "rig.log");
+  const int code = run_rig(
+      "commission --emulate --seed 1 --quiet --fault grid.v_pu=0.85@t=80 --out " + out.string(),
+      log_beside(out));
+  EXPECT_EQ(code, 4) << read_text(log_beside(out));
   const auto report = read_json(out / "report.json");
   EXPECT_EQ(report["safety"]["trip"]["cause"], "out_of_band");
   const auto rec = io::read_recording(out / "recording.csv");
@@ -100,14 +101,56 @@ TEST(CommissionFaults, MalformedTestFilesExit2BeforeAnythingIsWritten) {
   for (const auto& [text, key] : cases) {
     const auto out = dir / std::to_string(i);
     const auto test = write_file(dir / fmt::format("t{}.toml", i++), text);
-    const int code = run_rig(fmt::format("commission --emulate --test {} --out {}", test.string(),
-                                         out.string()),
-                             dir / "rig.log");
+    const int code =
+        run_rig(fmt::format("commission --emulate --test {} --out {}", test.string(), out.string()),
+                dir / "rig.log");
     const std::string log = read_text(dir / "rig.log");
     EXPECT_EQ(code, 2) << log;
     EXPECT_NE(log.find(key), std::string::npos) << log;
     EXPECT_FALSE(std::filesystem::exists(out / "recording.csv")) << "started despite " << key;
   }
+}
+
+// DESIGN.md section 4: an --out that is a file, is not writable or holds an earlier run's
+// files is exit 2 before plantsim starts (no plantsim.log) or the governor is touched; --force
+// clears an earlier run first, so none of its files stay beside the new ones.
+TEST(CommissionFaults, UnusableOrEarlierOutExits2AndForceClearsIt) {
+  const auto dir = fresh_dir("out-rules");
+  const auto file = write_file(dir / "a-file", "x\n");
+  for (const auto& [out, expected] : std::vector<std::pair<std::filesystem::path, std::string>>{
+           {file, "exists and is not a folder"}, {file / "sub", "cannot create the folder"}}) {
+    const int code = run_rig("commission --emulate --quiet --out " + out.string(), dir / "rig.log");
+    const std::string log = read_text(dir / "rig.log");
+    EXPECT_EQ(code, 2) << log;
+    EXPECT_NE(log.find(expected), std::string::npos) << log;
+  }
+  // An earlier run's files: refused, nothing of them touched.
+  const auto earlier = dir / "earlier";
+  std::filesystem::create_directories(earlier);
+  write_file(earlier / "model.json", "{\"type\":\"tf\",\"num\":[1],\"den\":[1],\"delay_s\":0}\n");
+  write_file(earlier / "h1.csv", "freq_hz,mag,phase_deg,coherence\n");
+  int code = run_rig("commission --emulate --quiet --out " + earlier.string(), dir / "rig.log");
+  EXPECT_EQ(code, 2) << read_text(dir / "rig.log");
+  EXPECT_NE(read_text(dir / "rig.log").find("--force"), std::string::npos);
+  EXPECT_FALSE(std::filesystem::exists(earlier / "plantsim.log"));
+  EXPECT_TRUE(std::filesystem::exists(earlier / "model.json"));
+  // With --force and a test that cannot produce a model (a 1 s excitation cannot reach the
+  // applied share the test demands), the old model.json and h1.csv are gone.
+  const auto test = write_file(dir / "nomodel.toml",
+                               "[steady_state]\nduration_s = 3.0\n[pilot]\nduration_s = 3.0\n"
+                               "[mmfm]\nmin_duration_s = 21.0\nmax_duration_s = 21.0\n"
+                               "min_applied_fraction = 1.0\n[sweep]\nenabled = false\n");
+  code = run_rig(
+      "commission --emulate --quiet --force --test " + test.string() + " --out " + earlier.string(),
+      dir / "rig.log");
+  EXPECT_EQ(code, 1) << read_text(dir / "rig.log");
+  EXPECT_FALSE(std::filesystem::exists(earlier / "model.json"));
+  EXPECT_FALSE(std::filesystem::exists(earlier / "h1.csv") &&
+               read_text(earlier / "h1.csv") == "freq_hz,mag,phase_deg,coherence\n");
+  const auto report = read_json(earlier / "report.json");
+  EXPECT_EQ(report["model_written"], false);
+  EXPECT_NE(report["model_rejected"].get<std::string>().find("applied excitation"),
+            std::string::npos);
 }
 
 TEST(CommissionFaults, LinkDropMidTestExit3AndRecordingReadable) {
@@ -117,9 +160,9 @@ TEST(CommissionFaults, LinkDropMidTestExit3AndRecordingReadable) {
   ASSERT_FALSE(uri.empty());
   const auto test = write_file(dir / "rt.toml", kRealtimeProfile);
   const Background rig = Background::start(
-      fmt::format("{}; echo $? > {}", (bin_dir() / "rig").string() + " commission --quiet --link " +
-                                          uri + " --test " + test.string() + " --out " +
-                                          (dir / "out").string(),
+      fmt::format("{}; echo $? > {}",
+                  (bin_dir() / "rig").string() + " commission --quiet --link " + uri + " --test " +
+                      test.string() + " --out " + (dir / "out").string(),
                   (dir / "code").string()),
       dir / "rig.log");
   std::this_thread::sleep_for(8s);  // steady state (3 s) done, pilot under way
@@ -140,8 +183,8 @@ TEST(CommissionFaults, OperatorAbortRampsDownAndKill9KeepsTheRecording) {
   const std::string rig_cmd = (bin_dir() / "rig").string() + " commission --quiet --link " + uri +
                               " --test " + test.string() + " --out ";
   // SIGINT: clean ramp-down, exit 4 (safety abort), bias back at baseline.
-  const Background a = Background::start(
-      fmt::format("exec {}", rig_cmd + (dir / "a").string()), dir / "a.log");
+  const Background a =
+      Background::start(fmt::format("exec {}", rig_cmd + (dir / "a").string()), dir / "a.log");
   std::this_thread::sleep_for(7s);
   kill(a.pid, SIGINT);
   a.wait_gone(30s);
@@ -151,8 +194,8 @@ TEST(CommissionFaults, OperatorAbortRampsDownAndKill9KeepsTheRecording) {
   const auto rec = io::read_recording(dir / "a/recording.csv");
   EXPECT_DOUBLE_EQ(rec.column("u")(rec.rows() - 1), 0.0);
   // kill -9: the recording holds every row up to the last flush and reads back.
-  const Background b = Background::start(
-      fmt::format("exec {}", rig_cmd + (dir / "b").string()), dir / "b.log");
+  const Background b =
+      Background::start(fmt::format("exec {}", rig_cmd + (dir / "b").string()), dir / "b.log");
   std::this_thread::sleep_for(6s);
   kill(b.pid, SIGKILL);
   b.wait_gone(10s);

@@ -1,8 +1,7 @@
 // rig commission --emulate end to end: the MMFM model must match the emulated plant's own
 // linearisation within the acceptance tolerances (+-1 dB, +-5 deg over 0.5-5 Hz).
-#include <gtest/gtest.h>
-
 #include <fmt/format.h>
+#include <gtest/gtest.h>
 
 #include "rig/io/recording.hpp"
 #include "tests/integration/commission/run_rig.hpp"
@@ -34,8 +33,8 @@ void run_and_check(const std::string& link_type, std::uint64_t seed) {
   const int code = run_rig(fmt::format("commission --emulate --preset stornoway --seed {} "
                                        "--link-type {} --test {} --quiet --out {}",
                                        seed, link_type, short_profile(), out.string()),
-                           out / "rig.log");
-  ASSERT_EQ(code, 0) << read_text(out / "rig.log");
+                           log_beside(out));
+  ASSERT_EQ(code, 0) << read_text(log_beside(out));
   expect_complete_outputs(out);
   const TruthError e = error_against_truth(out / "model.json");
   fmt::print("{} seed {}: MMFM vs plant linearisation over 0.5-5 Hz: {:.2f} dB, {:.2f} deg\n",
@@ -58,9 +57,9 @@ TEST(Commission, SameSeedGivesTheSameRecording) {
     const auto out = fresh_dir("repeat-" + std::to_string(i));
     ASSERT_EQ(run_rig(fmt::format("commission --emulate --seed 5 --test {} --quiet --out {}",
                                   short_profile(), out.string()),
-                      out / "rig.log"),
+                      log_beside(out)),
               0)
-        << read_text(out / "rig.log");
+        << read_text(log_beside(out));
     const std::string rec = read_text(out / "recording.csv");
     if (i == 0) {
       first = rec;

@@ -33,8 +33,8 @@ TEST(RealtimeTiming, ReportCarriesLoopTimingWithP99Below5ms) {
   const int code = run_rig(fmt::format("commission --emulate --clock realtime --seed 2 --test {} "
                                        "--quiet --out {}",
                                        test.string(), (out / "run").string()),
-                           out / "rig.log");
-  ASSERT_EQ(code, 0) << read_text(out / "rig.log");
+                           log_beside(out));
+  ASSERT_EQ(code, 0) << read_text(log_beside(out));
   const auto report = read_json(out / "run/report.json");
   ASSERT_TRUE(report.contains("loop_timing") && report["loop_timing"].is_object());
   const auto& t = report["loop_timing"];
@@ -75,8 +75,8 @@ TEST(RealtimeTiming, LockstepRecordsTheWallTimePerExchange) {
   std::ofstream(test) << kShortRealtimeProfile;
   const int code = run_rig(fmt::format("commission --emulate --test {} --quiet --out {}",
                                        test.string(), (out / "run").string()),
-                           out / "rig.log");
-  ASSERT_EQ(code, 0) << read_text(out / "rig.log");
+                           log_beside(out));
+  ASSERT_EQ(code, 0) << read_text(log_beside(out));
   const auto t = read_json(out / "run/report.json")["loop_timing"];
   fmt::print(
       "lockstep: {} exchanges, wall time per exchange p50 {:.3f} ms, p99 {:.3f} ms, max "

@@ -2,9 +2,8 @@
 #pragma once
 
 #include <filesystem>
-#include <string>
-
 #include <nlohmann/json.hpp>
+#include <string>
 
 namespace rig::testing {
 
@@ -12,6 +11,10 @@ std::filesystem::path bin_dir();
 std::filesystem::path source_dir();
 // A fresh folder under the test's temporary directory.
 std::filesystem::path fresh_dir(const std::string& name);
+// The log of a run whose --out is `out`: beside it, since --out must be new or empty.
+inline std::filesystem::path log_beside(const std::filesystem::path& out) {
+  return std::filesystem::path(out.string() + ".log");
+}
 // Runs `rig ARGS` with output to DIR/rig.log; returns the exit code (-1 when killed).
 int run_rig(const std::string& args, const std::filesystem::path& log);
 nlohmann::json read_json(const std::filesystem::path& path);

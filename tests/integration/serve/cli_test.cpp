@@ -65,8 +65,9 @@ TEST(PlantsimCli, RealPlantLineariseAndListParams) {
 TEST(PlantsimCli, HelpExitsZero) {
   const auto o = run_to_end({"--help"});
   EXPECT_EQ(o.exit_code, 0);
-  for (const char* opt : {"--preset", "--config", "--modbus", "--can", "--clock", "--tick",
-                          "--fault", "--seed", "--linearise", "--duration", "--readout"}) {
+  for (const char* opt :
+       {"--preset", "--config", "--modbus", "--can", "--clock", "--tick", "--fault", "--seed",
+        "--linearise", "--duration", "--readout", "--can-rig-address", "--can-sample-period"}) {
     EXPECT_NE(o.out.find(opt), std::string::npos) << opt;
   }
 }
@@ -85,6 +86,12 @@ TEST(PlantsimCli, BadInputExitsTwoWithOneLineNamingIt) {
   expect_usage_error({"--modbus", "rtu:/dev/plantsim-no-such-tty?baud=19200"},
                      "/dev/plantsim-no-such-tty");
   expect_usage_error({"--modbus", "rtu:/dev/null?baud=fast"}, "baud");
+  expect_usage_error({"--can", "udp://127.0.0.1:0", "--can-rig-address", "0x1F9"},
+                     "--can-rig-address");
+  expect_usage_error({"--can", "udp://127.0.0.1:0", "--can-rig-address", "F9"},
+                     "--can-rig-address");
+  expect_usage_error({"--can", "udp://127.0.0.1:0", "--can-sample-period", "often"},
+                     "--can-sample-period");
 }
 
 TEST(PlantsimCli, PortInUseExitsTwoAndNamesThePort) {

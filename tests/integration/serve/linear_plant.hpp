@@ -23,6 +23,7 @@ struct LinearPlantOptions {
   double fn_hz = 2.0;
   double zeta = 0.1;
   double noise_w = 500.0;  // standard deviation of the measurement noise
+  double bias_limit_pct = Plant::kDefaultExternalBiasLimitPct;  // the governor's clamp
   std::uint64_t seed = 1;
   std::chrono::nanoseconds tick = std::chrono::milliseconds(1);
 };
@@ -36,6 +37,7 @@ class LinearPlant final : public Plant {
   std::chrono::nanoseconds tick() const override { return options_.tick; }
   std::uint64_t ticks() const override { return ticks_; }
   double rated_power_w() const override { return options_.rated_power_w; }
+  double external_bias_limit_pct() const override { return options_.bias_limit_pct; }
 
  private:
   void update_measurement();

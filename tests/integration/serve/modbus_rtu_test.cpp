@@ -90,6 +90,13 @@ TEST(ModbusRtu, ServesThroughAPtyPairAndSurvivesNoise) {
   std::uint16_t regs[2];
   EXPECT_EQ(modbus_read_input_registers(ctx.get(), 9, 2, regs), -1);
   EXPECT_EQ(errno, EMBXILADD);
+  // Function 07 is not served: exception 01 rather than silence (the master's timeout).
+  const std::uint8_t fc07[] = {1, 0x07};
+  ASSERT_GT(modbus_send_raw_request(ctx.get(), fc07, sizeof fc07), 0);
+  std::uint8_t rsp[MODBUS_RTU_MAX_ADU_LENGTH];
+  ASSERT_EQ(modbus_receive_confirmation(ctx.get(), rsp), 5) << modbus_strerror(errno);
+  EXPECT_EQ(rsp[1], 0x87);
+  EXPECT_EQ(rsp[2], MODBUS_EXCEPTION_ILLEGAL_FUNCTION);
   // A request for another unit on the bus gets no answer from us. As on a real RS-485 bus,
   // the other unit answers it; the slave reads and discards that answer, then serves ours.
   const std::uint8_t other_request[] = {7, 0x04, 0x00, 0x00, 0x00, 0x01};

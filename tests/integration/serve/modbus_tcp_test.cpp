@@ -166,8 +166,8 @@ TEST(ModbusTcp, IllegalAddressesAndFunctionsAnsweredWithExceptions) {
   EXPECT_EQ(modbus_write_registers(ctx.get(), 99, 3, regs), -1);  // 99..101
   EXPECT_EQ(errno, EMBXILADD);
   std::uint8_t bits[8] = {};
-  EXPECT_EQ(modbus_read_bits(ctx.get(), 0, 1, bits), -1);  // no coils in this map
-  EXPECT_EQ(errno, EMBXILADD);
+  EXPECT_EQ(modbus_read_bits(ctx.get(), 0, 1, bits), -1);  // no coils: function not served
+  EXPECT_EQ(errno, EMBXILFUN);
   // An unknown function code (0x41) -> exception 01, illegal function.
   const std::uint8_t raw[] = {1, 0x41, 0, 0, 0, 1};
   ASSERT_GT(modbus_send_raw_request(ctx.get(), raw, sizeof raw), 0);
@@ -178,6 +178,70 @@ TEST(ModbusTcp, IllegalAddressesAndFunctionsAnsweredWithExceptions) {
   // An illegal write changed nothing and the connection still works.
   EXPECT_EQ(modbus_read_registers(ctx.get(), 0, 3, regs), 3);
   EXPECT_EQ(regs[0], 0);
+}
+
+// Only 03/04/06/16 are served. libmodbus alone would write holding registers through 0x16 and
+// 0x17 and leave 07 unanswered (the client timing out); every other code is exception 01.
+TEST(ModbusTcp, UndocumentedFunctionsAreRefusedWithIllegalFunction) {
+  auto s = start_served(linear_program(), {"--modbus", "tcp://127.0.0.1:0", "--clock", "lockstep"});
+  auto ctx = connect_tcp(s.modbus_port);
+  ASSERT_TRUE(ctx);
+  write_command(ctx.get(), 1000, 1);
+  EXPECT_EQ(modbus_mask_write_register(ctx.get(), map::kHoldBias, 0x0000, 0x0BB8), -1);
+  EXPECT_EQ(errno, EMBXILFUN) << modbus_strerror(errno);
+  const std::uint16_t bias[1] = {2500};
+  std::uint16_t back[1] = {};
+  EXPECT_EQ(modbus_write_and_read_registers(ctx.get(), map::kHoldBias, 1, bias, 0, 1, back), -1);
+  EXPECT_EQ(errno, EMBXILFUN) << modbus_strerror(errno);
+  for (const std::uint8_t function : {0x07, 0x11, 0x2B, 0x01, 0x05}) {
+    const std::uint8_t raw[] = {1, function, 0, 0, 0, 1};
+    ASSERT_GT(modbus_send_raw_request(ctx.get(), raw, function == 0x07 ? 2 : sizeof raw), 0);
+    std::uint8_t rsp[MODBUS_TCP_MAX_ADU_LENGTH];
+    ASSERT_EQ(modbus_receive_confirmation(ctx.get(), rsp), 9)
+        << "function " << int{function} << ": " << modbus_strerror(errno);
+    EXPECT_EQ(rsp[7], function | 0x80);
+    EXPECT_EQ(rsp[8], MODBUS_EXCEPTION_ILLEGAL_FUNCTION);
+  }
+  // Nothing of the refused writes reached the governor.
+  std::uint16_t h = 0;
+  ASSERT_EQ(modbus_read_registers(ctx.get(), map::kHoldBias, 1, &h), 1);
+  EXPECT_EQ(h, 1000);
+  advance(ctx.get(), 1);
+  EXPECT_EQ(bias_echo_of(read_inputs(ctx.get())), 1000);
+}
+
+// The governor clamps the external bias (gov.ext_bias_limit_pct, 5 % by default): input 5
+// echoes what it applies, so the rig sees the clamp as an echo departing from its command.
+TEST(ModbusTcp, GovernorClampsTheAppliedBias) {
+  auto s = start_served(linear_program(), {"--modbus", "tcp://127.0.0.1:0", "--clock", "lockstep"});
+  auto ctx = connect_tcp(s.modbus_port);
+  ASSERT_TRUE(ctx);
+  write_command(ctx.get(), 7500, 1);
+  advance(ctx.get(), 1);
+  EXPECT_EQ(bias_echo_of(read_inputs(ctx.get())), 5000);
+  write_command(ctx.get(), -12000, 2);
+  advance(ctx.get(), 1);
+  EXPECT_EQ(bias_echo_of(read_inputs(ctx.get())), -5000);
+  write_command(ctx.get(), 4999, 3);
+  advance(ctx.get(), 1);
+  EXPECT_EQ(bias_echo_of(read_inputs(ctx.get())), 4999);
+}
+
+// The clamp is a plant parameter: --list-params shows it and --fault changes it.
+TEST(ModbusTcp, RealPlantClampIsAParameter) {
+  if (!real_program_exists()) GTEST_SKIP() << real_program() << " has not been built";
+  const auto list = run_to_end({"--list-params"}, real_program());
+  EXPECT_NE(list.out.find("ext_bias_limit_pct = 5 "), std::string::npos) << list.out;
+  auto s = start_served(real_program(), {"--modbus", "tcp://127.0.0.1:0", "--clock", "lockstep",
+                                         "--fault", "gov.ext_bias_limit_pct=2@t=0.005"});
+  auto ctx = connect_tcp(s.modbus_port);
+  ASSERT_TRUE(ctx);
+  write_command(ctx.get(), 3000, 1);
+  advance(ctx.get(), 2);
+  EXPECT_EQ(bias_echo_of(read_inputs(ctx.get())), 3000);
+  write_command(ctx.get(), 3000, 2);
+  advance(ctx.get(), 10);
+  EXPECT_EQ(bias_echo_of(read_inputs(ctx.get())), 2000);
 }
 
 // Garbage on one connection closes that connection only; a half frame from a stalled client

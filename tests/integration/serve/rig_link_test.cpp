@@ -1,6 +1,7 @@
 // The rig's own GovernorLink clients (drivers::open_link) against the plantsim executable: the
 // two ends of the register and CAN maps agree, in lockstep, over Modbus TCP and can+udp.
 #include <cmath>
+#include <thread>
 
 #include "drivers/open_link.hpp"
 #include "tests/integration/serve/serve_fixture.hpp"
@@ -39,6 +40,9 @@ std::vector<double> run_link(const std::string& uri, int cycles) {
     }
     last_counter = sample->counter;
     EXPECT_NE(sample->status & drivers::kBiasActive, 0);
+    // The governor echoes what it applies (Modbus input 5, CAN PGN 0xFF53): the bias written
+    // in this exchange, since lockstep applies it before answering.
+    EXPECT_DOUBLE_EQ(sample->bias_echo_pct, bias_pct) << uri << " exchange " << k;
     power_kw.push_back(sample->power_kw);
   }
   EXPECT_TRUE(link.deactivate());
@@ -69,6 +73,46 @@ TEST(RigLink, CanUdpLinkAgainstPlantsim) {
       start_served(program(), {"--can", "udp://127.0.0.1:0", "--clock", "lockstep"}, false, true);
   ASSERT_GT(s.can_port, 0);
   expect_step_response(run_link("can+udp://127.0.0.1:" + std::to_string(s.can_port), 300), "can");
+}
+
+// `rig commission --link-type can+udp --clock realtime` failed at once ("timeout at PGN
+// 0xFF51"): its steady-state check only reads, and a can+udp node cannot send before it has
+// heard the rig. The link now sends 0xFF50 {bias 0, enable 00} on reads before activation,
+// which plantsim answers. Here the rig's CAN link does what the commission does: reads at
+// 100 Hz before anything is written, then activates and writes.
+TEST(RigLink, CanUdpRealtimeReadsBeforeTheFirstWrite) {
+  auto s = start_served(linear_program(), {"--can", "udp://127.0.0.1:0", "--clock", "realtime"},
+                        false, true);
+  ASSERT_GT(s.can_port, 0);
+  drivers::LinkOptions options;  // realtime, 200 ms response timeout
+  auto opened = drivers::open_link("can+udp://127.0.0.1:" + std::to_string(s.can_port), options);
+  ASSERT_TRUE(opened) << opened.error().message();
+  auto& link = *opened.value();
+  ASSERT_TRUE(link.configure());
+  std::optional<std::uint16_t> last;
+  for (int k = 0; k < 50; ++k) {  // 0.5 s of steady-state check
+    auto sample = link.read();
+    ASSERT_TRUE(sample) << "read " << k << ": " << sample.error().message();
+    if (last) {
+      EXPECT_NE(sample->counter, *last) << "read " << k << " returned an old tick";
+    }
+    last = sample->counter;
+    EXPECT_NE(sample->status & drivers::kRunning, 0);
+    EXPECT_EQ(sample->status & drivers::kBiasActive, 0);  // the idle frame changes nothing
+    EXPECT_DOUBLE_EQ(sample->bias_echo_pct, 0.0);
+    EXPECT_NEAR(sample->power_kw, 3500.0, 5.0);
+    std::this_thread::sleep_for(10ms);
+  }
+  ASSERT_TRUE(link.activate());
+  for (int k = 0; k < 20; ++k) {
+    ASSERT_TRUE(link.write(0.75));
+    auto sample = link.read();
+    ASSERT_TRUE(sample) << "write/read " << k << ": " << sample.error().message();
+    EXPECT_DOUBLE_EQ(sample->bias_echo_pct, 0.75);  // the answer to this very write
+    EXPECT_NE(sample->status & drivers::kBiasActive, 0);
+    std::this_thread::sleep_for(10ms);
+  }
+  EXPECT_TRUE(link.deactivate());
 }
 
 }  // namespace

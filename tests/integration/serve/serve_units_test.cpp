@@ -2,8 +2,10 @@
 // endpoint and tick parsing, the jitter histogram, and the governor rules on a linear plant.
 #include <gtest/gtest.h>
 
+#include "drivers/can/j1939.hpp"
 #include "drivers/governor_link.hpp"
 #include "drivers/modbus/modbus_server.hpp"
+#include "plantsim/serve/can_node.hpp"
 #include "plantsim/serve/endpoint.hpp"
 #include "plantsim/serve/governor.hpp"
 #include "plantsim/serve/modbus_node.hpp"
@@ -105,6 +107,57 @@ TEST(ServeUnits, GovernorHeartbeatPerSource) {
   g.advance(1);
   EXPECT_DOUBLE_EQ(g.snapshot().bias_applied_pct, 0.0);  // alive but disabled
   EXPECT_EQ(g.snapshot().status & drivers::kHeartbeatLost, 0);
+}
+
+// The governor's clamp (the plant's external_bias_limit_pct) bounds what is applied and
+// echoed, whatever the transport carried; disabled is still zero.
+TEST(ServeUnits, GovernorClampsTheAppliedBias) {
+  LinearPlantOptions o;
+  o.bias_limit_pct = 2.5;
+  serve::Governor g(std::make_unique<LinearPlant>(o));
+  g.set_enable(true);
+  g.heartbeat(serve::CommandSource::kModbus, 1);
+  g.set_bias_pct(4.0);
+  g.advance(1);
+  EXPECT_DOUBLE_EQ(g.snapshot().bias_applied_pct, 2.5);
+  EXPECT_DOUBLE_EQ(g.snapshot().bias_requested_pct, 4.0);
+  g.set_bias_pct(-30.0);
+  g.advance(1);
+  EXPECT_DOUBLE_EQ(g.snapshot().bias_applied_pct, -2.5);
+  g.set_bias_pct(1.25);
+  g.advance(1);
+  EXPECT_DOUBLE_EQ(g.snapshot().bias_applied_pct, 1.25);
+  EXPECT_EQ(Plant::kDefaultExternalBiasLimitPct, 5.0);
+}
+
+// The CAN node takes commands only from its configured rig address; enable state 11 keeps the
+// enable as it was.
+TEST(ServeUnits, CanNodeAcceptsCommandsOnlyFromTheRigAddress) {
+  namespace j1939 = drivers::j1939;
+  serve::Governor g(std::make_unique<LinearPlant>(LinearPlantOptions{}));
+  serve::CanNodeOptions options;
+  options.rig_address = 0x42;
+  auto node = serve::CanNode::open(serve::parse_can_endpoint("udp://127.0.0.1:0"), g,
+                                   serve::ClockMode::kLockstep, options);
+  ASSERT_TRUE(node) << node.error().message();
+  auto& n = *node.value();
+  n.handle(j1939::encode_rig_command({1.0, true, 0}));  // from 0xF9: not the rig here
+  EXPECT_DOUBLE_EQ(g.snapshot().bias_requested_pct, 0.0);
+  EXPECT_FALSE(g.snapshot().enabled);
+  EXPECT_EQ(n.counters().wrong_source, 1u);
+  n.handle(j1939::encode_lockstep({5}, 0xF9));
+  EXPECT_EQ(g.snapshot().ticks, 0u);
+  EXPECT_EQ(n.counters().wrong_source, 2u);
+  n.handle(j1939::encode_rig_command({1.0, true, 0}, 0x42));
+  EXPECT_DOUBLE_EQ(g.snapshot().bias_requested_pct, 1.0);
+  EXPECT_TRUE(g.snapshot().enabled);
+  n.handle(j1939::encode_rig_command({2.0, false, 1, /*keep_enable=*/true}, 0x42));
+  EXPECT_DOUBLE_EQ(g.snapshot().bias_requested_pct, 2.0);
+  EXPECT_TRUE(g.snapshot().enabled);  // "don't care" kept it
+  n.handle(j1939::encode_lockstep({5}, 0x42));
+  EXPECT_EQ(g.snapshot().ticks, 5u);
+  EXPECT_DOUBLE_EQ(g.snapshot().bias_applied_pct, 2.0);
+  EXPECT_EQ(n.counters().accepted, 3u);
 }
 
 }  // namespace

@@ -19,17 +19,19 @@ TEST(SocketCan, LockstepExchangeOnVcan0) {
   auto& bus = *probe.value();
   ASSERT_TRUE(bus.send(j1939::encode_rig_command(j1939::RigCommand{1.0, true, 0})));
   ASSERT_TRUE(bus.send(j1939::encode_lockstep(j1939::Lockstep{5})));
-  int samples = 0;
+  // Lockstep: one 0xFF51 for the 5 ticks, carrying the last tick's counter.
+  std::optional<j1939::PlantSample> sample;
   const auto end = std::chrono::steady_clock::now() + 2s;
-  while (samples < 5 && std::chrono::steady_clock::now() < end) {
+  while (!sample && std::chrono::steady_clock::now() < end) {
     auto f = bus.receive(100ms);
     if (f && j1939::pgn_of(f.value()) == j1939::kPgnPlantSample) {
-      auto sample = j1939::decode_plant_sample(f.value());
-      ASSERT_TRUE(sample);
-      EXPECT_EQ(sample->counter, ++samples);
+      auto decoded = j1939::decode_plant_sample(f.value());
+      ASSERT_TRUE(decoded);
+      sample = decoded.value();
     }
   }
-  EXPECT_EQ(samples, 5);
+  ASSERT_TRUE(sample) << "no 0xFF51 on vcan0";
+  EXPECT_EQ(sample->counter, 5);
 }
 
 }  // namespace

@@ -7,6 +7,7 @@
 #include <thread>
 #include <vector>
 
+#include "drivers/can/can_link.hpp"
 #include "drivers/can/j1939.hpp"
 #include "drivers/can/transport.hpp"
 #include "drivers/open_link.hpp"
@@ -19,7 +20,10 @@ using namespace std::chrono_literals;
 
 namespace {
 
-// Lockstep node: on 0xFF52 {n} sends n x (0xFF51, EEC1) and one GTACP; power follows the bias.
+// A governor as plantsim's CAN node behaves, in small: every accepted command (0xFF50, TSC1)
+// is echoed by 0xFF53 at the next tick. Lockstep: 0xFF52 {n} takes n ticks (EEC1 each), then
+// one 0xFF51 and one GTACP. free_run (realtime): one tick per millisecond once contacted, and
+// a 0xFF51 at every tick that answered a command. Power follows the applied bias.
 class TestNode {
  public:
   TestNode() {
@@ -49,47 +53,66 @@ class TestNode {
   std::atomic<bool> freeze_counter{false};
   std::atomic<bool> corrupt{false};
   std::atomic<bool> silent{false};
-  std::atomic<bool> free_run{false};  // realtime: one tick per millisecond once contacted
+  std::atomic<bool> no_echo{false};
+  std::atomic<bool> free_run{false};
+  std::atomic<double> clamp_pct{5.0};  // the governor's clamp on the applied bias
 
  private:
   void run() {
-    std::optional<std::uint8_t> previous;
     while (!stop_) {
       auto f = ep_->receive(free_run ? 1ms : 10ms);
-      if (free_run && ep_->has_peer()) tick();
-      if (!f) continue;
-      if (j::pgn_of(*f) == j::kPgnRigCommand) {
-        auto c = j::decode_rig_command(*f, previous);  // checks the heartbeat counter
-        if (!c) {
-          ++command_errors_;
-          continue;
-        }
-        previous = c->counter;
-        std::lock_guard lock(mutex_);
-        commands_.push_back(*c);
-        bias_pct_ = c->enable ? c->bias_pct : 0.0;
-      } else if (j::pgn_of(*f) == j::kPgnTsc1) {
-        auto t =
-            j::decode_tsc1(*f, tsc1_.empty() ? std::nullopt : std::optional(tsc1_.back().counter));
-        std::lock_guard lock(mutex_);
-        if (t) {
-          tsc1_.push_back(*t);
-        } else {
-          ++command_errors_;
-        }
-      } else if (auto l = j::decode_lockstep(*f); l && !silent) {
-        for (int k = 0; k < l->ticks; ++k) tick();
-        (void)ep_->send(j::encode_gtacp({power_w(), 0.0}));
+      if (free_run && ep_->has_peer()) {
+        const bool answered = tick();
+        if (answered) send_sample();
       }
+      if (f) take(*f);
+    }
+  }
+  void take(const can_frame& f) {
+    if (j::pgn_of(f) == j::kPgnRigCommand) {
+      auto c = j::decode_rig_command(f, previous_);  // checks the heartbeat counter
+      if (!c) {
+        ++command_errors_;
+        return;
+      }
+      previous_ = c->counter;
+      std::lock_guard lock(mutex_);
+      commands_.push_back(*c);
+      bias_pct_ = c->enable ? std::clamp(c->bias_pct, -clamp_pct.load(), clamp_pct.load()) : 0.0;
+      pending_echoes_.push_back(c->counter);
+    } else if (j::pgn_of(f) == j::kPgnTsc1) {
+      std::lock_guard lock(mutex_);
+      auto t =
+          j::decode_tsc1(f, tsc1_.empty() ? std::nullopt : std::optional(tsc1_.back().counter));
+      if (!t) {
+        ++command_errors_;
+        return;
+      }
+      tsc1_.push_back(*t);
+      pending_echoes_.push_back(t->counter);
+    } else if (auto l = j::decode_lockstep(f); l && !silent) {
+      for (int k = 0; k < l->ticks; ++k) tick();
+      send_sample();
+      (void)ep_->send(j::encode_gtacp({power_w(), 0.0}));
     }
   }
   double power_w() const { return 3.5e6 + bias_pct_ * 46.0e3; }
-  void tick() {
+  // One plant tick; true when it answered a command.
+  bool tick() {
     if (!freeze_counter) ++counter_;
+    (void)ep_->send(j::encode_eec1({600.5, 70.0}));
+    std::lock_guard lock(mutex_);
+    const bool answered = !pending_echoes_.empty();
+    for (auto c : pending_echoes_) {
+      if (!no_echo) (void)ep_->send(j::encode_bias_echo({bias_pct_, bias_pct_, counter_, 0x07, c}));
+    }
+    pending_echoes_.clear();
+    return answered;
+  }
+  void send_sample() {
     can_frame s = j::encode_plant_sample({power_w(), counter_, 0x07});
     if (corrupt) s.data[0] ^= 0x10;
     (void)ep_->send(s);
-    (void)ep_->send(j::encode_eec1({600.5, 70.0}));
   }
 
   std::unique_ptr<drivers::can::CanEndpoint> ep_;
@@ -98,6 +121,8 @@ class TestNode {
   mutable std::mutex mutex_;
   std::vector<j::RigCommand> commands_;
   std::vector<j::Tsc1> tsc1_;
+  std::vector<std::uint8_t> pending_echoes_;
+  std::optional<std::uint8_t> previous_;
   std::atomic<int> command_errors_{0};
   double bias_pct_ = 0.0;
   std::uint16_t counter_ = 100;
@@ -128,6 +153,7 @@ TEST(CanLink, LockstepCycleOverUdp) {
   auto first = link->read();
   ASSERT_TRUE(first) << first.error().message();
   EXPECT_EQ(first->counter, 101);
+  EXPECT_DOUBLE_EQ(first->bias_echo_pct, 0.5);
   ASSERT_TRUE(link->write(-1.25));
   ASSERT_TRUE(link->advance(4));
   auto s = link->read();
@@ -135,6 +161,7 @@ TEST(CanLink, LockstepCycleOverUdp) {
   EXPECT_EQ(s->counter, 105);
   EXPECT_DOUBLE_EQ(s->power_kw, 3500.0 - 1.25 * 46.0);
   EXPECT_DOUBLE_EQ(s->speed_rpm, 600.5);
+  EXPECT_DOUBLE_EQ(s->bias_echo_pct, -1.25);  // from 0xFF53
   EXPECT_EQ(s->status, 0x07);
   EXPECT_DOUBLE_EQ(s->plant_time_s, 0.105);
 
@@ -144,6 +171,52 @@ TEST(CanLink, LockstepCycleOverUdp) {
   EXPECT_DOUBLE_EQ(c[1].bias_pct, 0.5);
   EXPECT_DOUBLE_EQ(c[2].bias_pct, -1.25);
   EXPECT_EQ(node.command_errors(), 0);  // heartbeat counter +1 per frame, checksums good
+}
+
+// The echo is what the governor applies, not what was written: a clamping governor shows.
+TEST(CanLink, EchoReportsTheClampedBias) {
+  TestNode node;
+  node.clamp_pct = 2.0;
+  auto link = connect(node);
+  ASSERT_TRUE(link->activate());
+  ASSERT_TRUE(link->write(3.5));
+  ASSERT_TRUE(link->advance(2));
+  auto s = link->read();
+  ASSERT_TRUE(s) << s.error().message();
+  EXPECT_DOUBLE_EQ(s->bias_echo_pct, 2.0);
+}
+
+TEST(CanLink, MissingEchoIsATimeoutNamingFF53) {
+  TestNode node;
+  node.no_echo = true;
+  auto link = connect(node);
+  ASSERT_TRUE(link->activate());
+  ASSERT_TRUE(link->advance(1));
+  auto s = link->read();
+  ASSERT_FALSE(s);
+  EXPECT_EQ(s.error().kind, LinkErrorKind::kTimeout);
+  EXPECT_NE(s.error().where.find("PGN 0xFF53"), std::string::npos) << s.error().message();
+}
+
+// Before activation the link sends 0xFF50 {bias 0, enable 00} so that a governor answering
+// commands (and a can+udp node, which cannot send before it has heard the rig) answers reads.
+TEST(CanLink, ReadsBeforeActivationSendIdleFrames) {
+  TestNode node;
+  node.free_run = true;
+  auto link = connect(node, /*lockstep=*/false);
+  for (int i = 0; i < 3; ++i) {
+    auto s = link->read();
+    ASSERT_TRUE(s) << "read " << i << ": " << s.error().message();
+    EXPECT_DOUBLE_EQ(s->bias_echo_pct, 0.0);
+  }
+  const auto c = node.commands();
+  ASSERT_EQ(c.size(), 3u);  // one idle frame per read
+  for (const auto& cmd : c) {
+    EXPECT_FALSE(cmd.enable);
+    EXPECT_FALSE(cmd.keep_enable);
+    EXPECT_DOUBLE_EQ(cmd.bias_pct, 0.0);
+  }
+  EXPECT_EQ(node.command_errors(), 0);
 }
 
 TEST(CanLink, RealtimeReadsReturnNewTicks) {
@@ -159,12 +232,15 @@ TEST(CanLink, RealtimeReadsReturnNewTicks) {
     if (last) {
       EXPECT_NE(s->counter, *last);  // every read is a tick not seen before
     }
+    EXPECT_NEAR(s->bias_echo_pct, 0.1 * i, 1e-9);  // the answer to this write, not an older one
     last = s->counter;
     std::this_thread::sleep_for(3ms);
   }
   node.freeze_counter = true;
   std::this_thread::sleep_for(5ms);
-  (void)link->read();  // may still return the last tick before the freeze
+  ASSERT_TRUE(link->write(0.0));
+  (void)link->read();  // may still return a tick taken before the freeze
+  ASSERT_TRUE(link->write(0.0));
   auto s = link->read();
   ASSERT_FALSE(s) << "counter still moving: " << s->counter;
   EXPECT_EQ(s.error().kind, LinkErrorKind::kStale) << s.error().message();
@@ -186,7 +262,7 @@ TEST(CanLink, DeactivateRampsAndClearsEnable) {
   EXPECT_EQ(node.command_errors(), 0);
 }
 
-TEST(CanLink, Tsc1CommandsSpeedRequests) {
+TEST(CanLink, Tsc1CommandsSpeedRequestsAndReleases) {
   TestNode node;
   auto link = connect(node, true, "?command=tsc1&sync_rpm=600");
   ASSERT_TRUE(link->activate());
@@ -199,9 +275,22 @@ TEST(CanLink, Tsc1CommandsSpeedRequests) {
   EXPECT_DOUBLE_EQ(t[0].speed_rpm, 600.0);  // activate: synchronous speed, zero bias
   EXPECT_DOUBLE_EQ(t[1].speed_rpm, 606.0);  // 600 (1 + 1 %)
   EXPECT_DOUBLE_EQ(t[2].speed_rpm, 597.0);
-  EXPECT_DOUBLE_EQ(t.back().speed_rpm, 600.0);
+  EXPECT_FALSE(t[2].release);
+  EXPECT_TRUE(t.back().release);        // disable: override control mode 00, "no override"
   EXPECT_EQ(node.command_errors(), 0);  // TSC1 counter +1 per frame, checksums good
   EXPECT_TRUE(node.commands().empty());
+}
+
+// The TSC1 link says once, at configure(), how coarse its speed requests are.
+TEST(CanLink, Tsc1WarnsAboutItsResolution) {
+  TestNode node;
+  auto tsc1 = connect(node, true, "?command=tsc1&sync_rpm=600");
+  const auto w = drivers::link_warnings(*tsc1);
+  ASSERT_EQ(w.size(), 1u);
+  EXPECT_NE(w[0].find("0.125 rpm = 0.0208 %"), std::string::npos) << w[0];
+  EXPECT_NE(w[0].find("600 rpm"), std::string::npos) << w[0];
+  auto ff50 = connect(node);
+  EXPECT_TRUE(drivers::link_warnings(*ff50).empty());
 }
 
 TEST(CanLink, CorruptFrameIsChecksumError) {

@@ -1,5 +1,6 @@
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
@@ -49,6 +50,27 @@ TEST(J1939Tsc1, WorkedExample750Rpm) {
   ASSERT_TRUE(d) << d.error().message();
   EXPECT_DOUBLE_EQ(d->speed_rpm, 750.0);
   EXPECT_EQ(d->counter, 5);
+  EXPECT_FALSE(d->release);
+}
+
+// Override control mode 00 ("no override") ends the override; the speed is "not available".
+TEST(J1939Tsc1, ReleaseIsOverrideMode00) {
+  const can_frame f = j::encode_tsc1({600.0, 6, true});
+  EXPECT_EQ(f.data[0], 0xF0);  // mode 00, conditions 00, priority 11, reserved 11
+  EXPECT_EQ(f.data[1], 0xFF);
+  EXPECT_EQ(f.data[2], 0xFF);
+  auto d = j::decode_tsc1(f, std::uint8_t{5});
+  ASSERT_TRUE(d) << d.error().message();
+  EXPECT_TRUE(d->release);
+  EXPECT_EQ(d->counter, 6);
+  // Torque control (mode 10) is not something this governor takes.
+  can_frame torque = j::encode_tsc1({600.0, 0});
+  torque.data[0] = 0xF2;
+  torque.data[7] =
+      static_cast<std::uint8_t>((j::checksum4(torque.data, 0, raw_id(torque)) << 4) | 0);
+  auto t = j::decode_tsc1(torque);
+  ASSERT_FALSE(t);
+  EXPECT_EQ(t.error().kind, LinkErrorKind::kProtocol);
 }
 
 TEST(J1939Gtacp, WorkedExample4p6Mw) {
@@ -63,38 +85,128 @@ TEST(J1939Gtacp, WorkedExample4p6Mw) {
   EXPECT_DOUBLE_EQ(d->reactive_power_var, 0.0);
 }
 
-TEST(J1939Eec1, RoundTripSpeed) {
+TEST(J1939Eec1, RoundTripSpeedAndControllingAddress) {
   const can_frame f = j::encode_eec1({600.375, 80.0});
   EXPECT_EQ(j::pgn_of(f), j::kPgnEec1);
-  EXPECT_EQ(raw_id(f), 0x0CF00400u);
+  EXPECT_EQ(raw_id(f), 0x0CF00400u);          // J1939-71's EEC1 identifier, priority 3
+  EXPECT_EQ(f.data[5], j::kGovernorAddress);  // no override: the engine controls itself
   auto d = j::decode_eec1(f);
   ASSERT_TRUE(d);
   EXPECT_DOUBLE_EQ(d->speed_rpm, 600.375);
   EXPECT_DOUBLE_EQ(d->actual_torque_pct, 80.0);
+  const can_frame overridden = j::encode_eec1({600.0, 80.0, j::kRigAddress});
+  EXPECT_EQ(overridden.data[5], 0xF9);
+  EXPECT_EQ(j::decode_eec1(overridden)->controlling_address, j::kRigAddress);
+}
+
+// Priority 3 for control (TSC1, EEC1 as J1939-71; 0xFF50 like TSC1), 6 for the data frames.
+TEST(J1939Id, PrioritiesOfEveryFrame) {
+  auto priority = [](const can_frame& f) { return j::decode_id(raw_id(f)).priority; };
+  EXPECT_EQ(priority(j::encode_tsc1({600.0, 0})), 3);
+  EXPECT_EQ(priority(j::encode_eec1({600.0, 0.0})), 3);
+  EXPECT_EQ(priority(j::encode_rig_command({0.0, true, 0})), 3);
+  EXPECT_EQ(priority(j::encode_gtacp({1e6, 0.0})), 6);
+  EXPECT_EQ(priority(j::encode_plant_sample({1e6, 1, 0})), 6);
+  EXPECT_EQ(priority(j::encode_lockstep({1})), 6);
+  EXPECT_EQ(priority(j::encode_bias_echo({})), 6);
+  EXPECT_EQ(raw_id(j::encode_gtacp({1e6, 0.0})), 0x18FE0500u);  // J1939-71's GTACP identifier
+  EXPECT_EQ(raw_id(j::encode_rig_command({0.0, true, 0})), 0x0CFF50F9u);
+  EXPECT_EQ(raw_id(j::encode_bias_echo({})), 0x18FF5300u);
 }
 
 TEST(J1939RigCommand, RoundTripAndQuantisation) {
-  for (double bias : {0.0, 1.2345, -2.9996, 3.0}) {
+  for (double bias : {0.0, 1.2345, -2.9996, 3.0, -0.001, -0.512}) {
     const can_frame f = j::encode_rig_command({bias, true, 9});
     auto d = j::decode_rig_command(f, std::uint8_t{8});
     ASSERT_TRUE(d) << d.error().message();
-    EXPECT_DOUBLE_EQ(d->bias_pct, drivers::bias_from_raw(drivers::quantise_bias(bias)));
+    EXPECT_DOUBLE_EQ(d->bias_pct, drivers::bias_from_raw(drivers::quantise_bias(bias)))
+        << "CAN and Modbus must quantise alike";
     EXPECT_NEAR(d->bias_pct, bias, 0.0005 + 1e-12);  // half a bit
     EXPECT_TRUE(d->enable);
+    EXPECT_FALSE(d->keep_enable);
     EXPECT_EQ(d->counter, 9);
   }
-  // 1.2345 % -> raw 1235 (round half away from zero) = 0x04D3, little-endian.
+  // 1.2345 % -> round(1234.5) + 32000 = 33235 = 0x81D3, little-endian.
   const can_frame f = j::encode_rig_command({1.2345, false, 0});
   EXPECT_EQ(f.data[0], 0xD3);
-  EXPECT_EQ(f.data[1], 0x04);
-  EXPECT_EQ(f.data[2] & 1, 0);
+  EXPECT_EQ(f.data[1], 0x81);
+  // -0.001 % -> 31999 = 0x7CFF: a value, not J1939's "not available" 0xFFFF.
+  const can_frame small = j::encode_rig_command({-0.001, true, 0});
+  EXPECT_EQ(small.data[0], 0xFF);
+  EXPECT_EQ(small.data[1], 0x7C);
+  EXPECT_EQ(j::encode_rig_command({0.0, true, 0}).data[1], 0x7D);  // 32000 = 0x7D00: 0 %
 }
 
-TEST(J1939RigCommand, BiasClampedToInt16) {
-  const can_frame hi = j::encode_rig_command({1000.0, true, 0});
-  const can_frame lo = j::encode_rig_command({-1000.0, true, 0});
-  EXPECT_DOUBLE_EQ(j::decode_rig_command(hi)->bias_pct, 32.767);
-  EXPECT_DOUBLE_EQ(j::decode_rig_command(lo)->bias_pct, -32.768);
+// Byte 2: the J1939 2-bit state, reserved bits 1: 0xFC disable, 0xFD enable, 0xFF don't care.
+TEST(J1939RigCommand, EnableIsATwoBitStateField) {
+  EXPECT_EQ(j::encode_rig_command({0.5, false, 1}).data[2], 0xFC);
+  EXPECT_EQ(j::encode_rig_command({0.5, true, 1}).data[2], 0xFD);
+  const can_frame keep = j::encode_rig_command({0.5, true, 1, true});
+  EXPECT_EQ(keep.data[2], 0xFF);
+  auto k = j::decode_rig_command(keep);
+  ASSERT_TRUE(k);
+  EXPECT_TRUE(k->keep_enable);
+  EXPECT_FALSE(k->enable);
+  // 10 is J1939's error indicator: the frame is refused.
+  can_frame error = j::encode_rig_command({0.5, true, 1});
+  error.data[2] = 0xFE;
+  error.data[7] = static_cast<std::uint8_t>((1 << 4) | j::checksum4(error.data, 1, raw_id(error)));
+  auto e = j::decode_rig_command(error);
+  ASSERT_FALSE(e);
+  EXPECT_EQ(e.error().kind, LinkErrorKind::kProtocol);
+  EXPECT_NE(e.error().detail.find("enable state 10"), std::string::npos);
+}
+
+// Every bias of +-32 % in 0.001 % steps encodes inside 0x0000..0xFAFF and back to itself.
+TEST(J1939Bias, SlotCoversPlusMinus32PercentOutsideReservedRanges) {
+  int bad = 0;
+  for (int k = -32000; k <= 32000; ++k) {
+    const std::uint16_t raw = j::encode_bias(k * 0.001);
+    const auto back = j::decode_bias(raw);
+    if (raw > 0xFAFF || !back || std::abs(*back - k * 0.001) > 1e-9) ++bad;
+  }
+  EXPECT_EQ(bad, 0);
+  EXPECT_EQ(j::encode_bias(0.0), 32000);
+  EXPECT_EQ(j::encode_bias(std::nan("")), 32000);  // NaN is no bias
+  EXPECT_EQ(j::encode_bias(1000.0), 0xFAFF);       // clamped to +32.255 %
+  EXPECT_EQ(j::encode_bias(-1000.0), 0x0000);      // clamped to -32.000 %
+  EXPECT_DOUBLE_EQ(*j::decode_bias(0xFAFF), 32.255);
+  EXPECT_DOUBLE_EQ(j::quantise_bias_slot(-40.0), -32.0);
+  for (std::uint32_t raw : {0xFB00u, 0xFDFFu, 0xFE00u, 0xFFFFu}) {
+    EXPECT_FALSE(j::decode_bias(static_cast<std::uint16_t>(raw))) << raw;
+  }
+}
+
+TEST(J1939RigCommand, ReservedBiasValuesAreRefused) {
+  can_frame f = j::encode_rig_command({0.5, true, 2});
+  f.data[0] = 0xFF;  // bias 0xFFFF: "not available"
+  f.data[1] = 0xFF;
+  f.data[7] = static_cast<std::uint8_t>((2 << 4) | j::checksum4(f.data, 2, raw_id(f)));
+  auto r = j::decode_rig_command(f);
+  ASSERT_FALSE(r);
+  EXPECT_EQ(r.error().kind, LinkErrorKind::kProtocol);
+  EXPECT_NE(r.error().detail.find("not available"), std::string::npos) << r.error().detail;
+}
+
+TEST(J1939BiasEcho, RoundTripAndLayout) {
+  const can_frame f = j::encode_bias_echo({-0.512, 7.5, 0x1234, 0x07, 11});
+  EXPECT_EQ(j::pgn_of(f), j::kPgnBiasEcho);
+  EXPECT_EQ(f.data[0] | (f.data[1] << 8), 32000 - 512);
+  EXPECT_EQ(f.data[2] | (f.data[3] << 8), 32000 + 7500);
+  EXPECT_EQ(f.data[4], 0x34);
+  EXPECT_EQ(f.data[5], 0x12);
+  EXPECT_EQ(f.data[6], 0x07);
+  EXPECT_EQ(f.data[7] >> 4, 11);
+  auto d = j::decode_bias_echo(f);
+  ASSERT_TRUE(d) << d.error().message();
+  EXPECT_DOUBLE_EQ(d->applied_pct, -0.512);
+  EXPECT_DOUBLE_EQ(d->received_pct, 7.5);
+  EXPECT_EQ(d->sample_counter, 0x1234);
+  EXPECT_EQ(d->status, 0x07);
+  EXPECT_EQ(d->command_counter, 11);
+  can_frame bad = f;
+  bad.data[0] ^= 0x04;
+  EXPECT_EQ(j::decode_bias_echo(bad).error().kind, LinkErrorKind::kChecksum);
 }
 
 TEST(J1939RigCommand, ChecksumMatchesDocumentedFormula) {
@@ -194,7 +306,8 @@ TEST(J1939Checksum, EverySingleBitErrorInTheDataIsDetected) {
         can_frame bad = good;
         bad.data[byte] ^= static_cast<std::uint8_t>(1u << bit);
         ++flips;
-        missed += j::decode_rig_command(bad) ? 1 : 0;
+        auto r = j::decode_rig_command(bad);  // the checksum is checked before the values
+        missed += (r || r.error().kind != LinkErrorKind::kChecksum) ? 1 : 0;
       }
     }
   }

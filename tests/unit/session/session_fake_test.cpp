@@ -92,9 +92,9 @@ TEST(SessionFake, NominalGovernorPassesWithAModel) {
   EXPECT_EQ(r.data.exit_code, kExitOk) << r.data.outcome;
   expect_safe_end(link);
   EXPECT_TRUE(fs::exists(r.out / "model.json"));
-  EXPECT_GT(r.data.applied_std_pct, 0.5 * r.data.excitation_sigma_pct);
-  ASSERT_TRUE(r.data.mmfm && r.data.mmfm->derived.valid);
-  EXPECT_NEAR(r.data.mmfm->derived.fn_hz, 2.0, 0.1);
+  EXPECT_GT(r.data.excitation.applied_std_pct, 0.5 * r.data.excitation.planned_std_pct);
+  ASSERT_TRUE(r.data.excitation.mmfm && r.data.excitation.mmfm->derived.valid);
+  EXPECT_NEAR(r.data.excitation.mmfm->derived.fn_hz, 2.0, 0.1);
   EXPECT_LT(r.data.max_abs_deviation_pct, 3.0);
 }
 
@@ -210,7 +210,7 @@ TEST(SessionFake, AnExcitationBelowTheRequiredAppliedShareIsNotCalledAModel) {
   EXPECT_EQ(r.data.exit_code, kExitAcceptance) << r.data.outcome;
   EXPECT_NE(r.data.outcome.find("no model: the applied excitation"), std::string::npos)
       << r.data.outcome;
-  EXPECT_LT(r.data.applied_std_pct, 0.99 * r.data.excitation_sigma_pct);
+  EXPECT_LT(r.data.excitation.applied_std_pct, 0.99 * r.data.excitation.planned_std_pct);
   EXPECT_FALSE(fs::exists(r.out / "model.json"));
   expect_safe_end(link);
 }

@@ -27,7 +27,7 @@ PlantRun run_stornoway(const plantsim::LinearModel& lin, double prior_factor, un
   plantsim::PlantOptions po;
   po.seed = seed;
   auto plant = plantsim::make_plant(po);
-  // Steady-state record (3 s): P0 and the noise, as the sequencer's check would give them.
+  // Steady-state record (3 s): P0 and the noise, as the steady-state phase would give them.
   double sum = 0.0, sum2 = 0.0;
   const int n0 = 300;
   for (int k = 0; k < n0; ++k) {

@@ -1,0 +1,98 @@
+// The pilot (DESIGN.md section 8, layer 1): a short excitation at the test file's amplitude
+// measures the gain that plans the main excitation's amplitude (pilot.hpp).
+#include <fmt/format.h>
+
+#include <cmath>
+
+#include "rig/session/phase.hpp"
+#include "rig/session/pilot.hpp"
+#include "rig/signal/excitation.hpp"
+
+namespace rig::session {
+
+Eigen::VectorXd test_excitation(const TestConfig& c, Eigen::Index n, double sigma_pct,
+                                std::uint64_t seed) {
+  if (c.excitation.type == ExcitationType::kPrbs) {
+    signal::PrbsOptions p;
+    p.n = n;
+    p.register_length = c.excitation.prbs_register_length;
+    p.clock_divider = c.excitation.prbs_clock_divider;
+    p.amplitude = sigma_pct;
+    p.seed = seed;
+    return signal::prbs_excitation(p);
+  }
+  signal::GaussianOptions g;
+  g.n = n;
+  g.dt_s = 1.0 / c.link.sample_rate_hz;
+  g.bandwidth_hz = c.excitation.bandwidth_hz;
+  g.sigma = sigma_pct;
+  g.clip_sigma = kExcitationClipSigma;
+  g.seed = seed;
+  return signal::gaussian_excitation(g);
+}
+
+namespace {
+
+// The pilot's own noise sequence, distinct from the main excitation's.
+constexpr std::uint64_t kPilotSeedOffset = 7919;
+
+class PilotPhase final : public SupervisedPhase {
+ public:
+  const char* name() const override { return "pilot"; }
+
+ protected:
+  Phase code() const override { return Phase::kPilot; }
+
+  bool prepare(RunContext& ctx) override {
+    const TestConfig& c = ctx.config;
+    soft_ = soft_start_samples(ctx);
+    n_ = soft_ + std::lround(c.pilot.duration_s * c.link.sample_rate_hz);
+    e_ = test_excitation(c, n_, c.pilot.amplitude_pct, c.excitation.seed + kPilotSeedOffset);
+    return true;
+  }
+
+  std::optional<double> request(RunContext& ctx, long k) override {
+    ctx.loop.status().eta_s = static_cast<double>(n_ - k) * ctx.dt_s();
+    if (k >= n_) return std::nullopt;
+    return e_(k);
+  }
+
+  void consume(RunContext& ctx, const TickResult& r, long k) override {
+    if (k < soft_) return;  // scale still rising
+    ctx.pilot_u.push_back(r.out.excitation_pct);
+    ctx.pilot_y.push_back(r.sample->power_kw - ctx.p0_kw);
+  }
+
+  bool conclude(RunContext& ctx, bool completed) override {
+    if (!completed) return false;
+    const TestConfig& c = ctx.config;
+    PilotPlanLimits limits;
+    limits.band_kw = ctx.band_kw();
+    limits.plan_fraction = c.safety.plan_fraction;
+    limits.clamp_pct = c.safety.clamp_pct;
+    limits.noise_std_kw = ctx.noise_kw();
+    const PilotResult& p = ctx.data.pilot.emplace(
+        ctx.off_loop([&] { return analyse_pilot(ctx.pilot_u, ctx.pilot_y, limits); }));
+    if (!p.ok) {
+      ctx.fail(kExitLinkFault, p.reason);
+      return false;
+    }
+    ctx.data.excitation.planned_std_pct = p.planned_std_pct;
+    ctx.view.message(fmt::format(
+        "pilot: gain {:.1f} kW/%, planned excitation std {:.3f} % (predicted peak {:.1f} of "
+        "{:.1f} kW){}",
+        p.gain_kw_per_pct, p.planned_std_pct, p.predicted_peak_kw, limits.band_kw,
+        p.limited_by_clamp ? ", limited by the clamp" : ""));
+    return true;
+  }
+
+ private:
+  long soft_ = 0, n_ = 0;
+  Eigen::VectorXd e_;
+};
+
+}  // namespace
+
+std::unique_ptr<SessionPhase> make_pilot_phase() { return std::make_unique<PilotPhase>(); }
+
+}  // namespace rig::session

@@ -1,0 +1,121 @@
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+
+#include "rig/session/phase.hpp"
+
+namespace rig::session {
+
+int exit_code_for(TripCause cause) {
+  switch (cause) {
+    case TripCause::kNone:
+      return kExitOk;
+    case TripCause::kOutOfBand:
+    case TripCause::kExternal:
+    case TripCause::kRigFailure:
+      return kExitSafety;
+    default:
+      return kExitLinkFault;  // stale, missing, NaN, link, governor status, echo
+  }
+}
+
+RunContext::RunContext(SessionData& d, drivers::GovernorLink& l, io::RecordingWriter& recorder,
+                       LiveView& v, const SessionOptions& options)
+    : data(d), config(d.config), link(l), view(v), loop(l, d.config, recorder, v, options.abort) {}
+
+double RunContext::noise_kw() const {
+  return data.steady ? data.steady->noise_pct / 100.0 * p0_kw : 0.0;
+}
+
+void RunContext::fail(int code, const std::string& outcome) {
+  data.exit_code = code;
+  data.outcome = outcome;
+  loop.event(code == kExitSafety ? "trip" : "fault", outcome);
+}
+
+SupervisorConfig RunContext::supervisor_config(double peak_to_rms) const {
+  const TestConfig& c = config;
+  SupervisorConfig s;
+  s.p0_kw = p0_kw;
+  s.band_fraction = c.safety.band_pct / 100.0;
+  s.band_override = c.safety.allow_band_above_3pct;
+  s.baseline_bias_pct = 0.0;
+  s.clamp_pct = c.safety.clamp_pct;
+  s.ramp_rate_pct_per_s = c.safety.ramp_pct_per_s;
+  s.dt_s = loop.dt_s();
+  s.backoff.zero_fraction = std::max(c.safety.backoff_fraction, s.backoff.start_fraction + 0.05);
+  s.backoff.plan_fraction = c.safety.plan_fraction;
+  s.backoff.peak_to_rms = peak_to_rms;
+  s.backoff.resonance_hz = std::min(resonance_hz, 0.9 * c.link.sample_rate_hz / 6.0);
+  s.noise_rms_kw = noise_kw();
+  s.plausible = plausible;
+  if (acknowledged) {
+    // Layer 0: from activation on the governor must keep the bias active and echo it.
+    s.required_status_mask |= drivers::kBiasActive;
+    s.echo.enabled = true;
+    s.echo.tolerance_pct = c.safety.echo_tolerance_pct;
+    s.echo.delay_ticks = std::min(
+        63, static_cast<int>(std::ceil(c.safety.echo_delay_s * c.link.sample_rate_hz - 1e-9)));
+    s.echo.max_bad_ticks =
+        static_cast<int>(std::ceil(c.safety.echo_max_bad_s * c.link.sample_rate_hz - 1e-9));
+  }
+  return s;
+}
+
+bool RunContext::record_trip(const Supervisor& sup) {
+  if (!sup.tripped()) return false;
+  const TripRecord& trip = *sup.trip_record();
+  data.trip = trip;
+  fail(exit_code_for(trip.cause), fmt::format("{} in the {} phase: {}", to_string(trip.cause),
+                                              to_string(loop.phase()), trip.text));
+  return true;
+}
+
+double RunContext::timing_correction_s() const {
+  const double read_lag_s = lockstep() ? dt_s() : 0.0;
+  return read_lag_s - 0.5 * dt_s();
+}
+
+void RunContext::correct_timing(std::vector<fra::FrfPoint>& frf) const {
+  const double c = timing_correction_s();
+  for (auto& p : frf) p.phase_deg = fra::wrap_deg(p.phase_deg - 360.0 * p.freq_hz * c);
+}
+
+double fade_out(long j, long n) {
+  return j >= n ? 0.0
+                : 0.5 * (1.0 + std::cos(M_PI * static_cast<double>(j) / static_cast<double>(n)));
+}
+
+long SupervisedPhase::soft_start_samples(const RunContext& ctx) {
+  const SupervisorConfig s = ctx.supervisor_config();
+  return static_cast<long>(std::ceil(1.0 / (s.backoff.recover_rate_per_s * s.dt_s))) + 1;
+}
+
+bool SupervisedPhase::run(RunContext& ctx) {
+  if (!prepare(ctx)) return true;
+  ctx.loop.set_phase(code());
+  Supervisor sup(ctx.supervisor_config(peak_to_rms()));
+  sup.start();
+  long k = 0;
+  bool exciting = true;
+  while (!sup.done()) {
+    double req = 0.0;
+    if (exciting) {
+      if (const std::optional<double> next = request(ctx, k)) {
+        req = *next;
+      } else {
+        exciting = false;
+        sup.finish();
+      }
+    }
+    const TickResult r = ctx.loop.supervised(sup, req);
+    if (r.sample && exciting && !sup.tripped()) consume(ctx, r, k);
+    ++k;
+    if (sup.tripped() && ctx.loop.link_gone()) break;  // nothing more can be written
+  }
+  ctx.loop.show(true);
+  return conclude(ctx, !ctx.record_trip(sup));
+}
+
+}  // namespace rig::session
