@@ -39,14 +39,11 @@ void write_file_atomic(const std::filesystem::path& path, std::string_view text)
   }
 }
 
+// A model or other small text file: the checks of InputFile (a FIFO or a device such as
+// /dev/zero is refused instead of read forever), at most kMaxTextFileBytes.
 std::string read_file_text(const std::filesystem::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) {
-    throw InputError(path.string(), 0, "", "cannot open the file");
-  }
-  std::stringstream buffer;
-  buffer << in.rdbuf();
-  return buffer.str();
+  constexpr std::size_t kMaxTextFileBytes = std::size_t{64} << 20;
+  return read_small_input_file(path, "a model", kMaxTextFileBytes);
 }
 
 }  // namespace rig::io

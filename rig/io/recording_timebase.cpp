@@ -55,6 +55,36 @@ bool from_scalars(const Recording& rec, double& dt_s, std::string& what) {
   return false;
 }
 
+// The sidecar's sample_rate_hz against the file's own time base (recording.hpp: refused
+// beyond kSampleRateTolerance, a warning only when --dt settles the time base).
+void check_sidecar_rate(Recording& rec, const ReadOptions& options) {
+  if (!rec.sidecar.sample_rate_hz) return;
+  double file_dt = 0.0;
+  std::string what;
+  if (rec.sampling.has_time) {
+    file_dt = rec.sampling.dt_s;
+    what = fmt::format("the time column \"{}\" of {} says (mean step {:.6g} s)", rec.time_name,
+                       rec.source, file_dt);
+  } else if (std::string scalar; from_scalars(rec, file_dt, scalar)) {
+    what = fmt::format("the {} of {} says ({:.6g} s)", scalar, rec.source, file_dt);
+  } else {
+    return;
+  }
+  const double rate = *rec.sidecar.sample_rate_hz;
+  if (!(std::abs(1.0 / rate - file_dt) > kSampleRateTolerance * file_dt)) return;
+  const std::string side = rec.sidecar.source.empty() ? "sidecar" : rec.sidecar.source;
+  const std::string message = fmt::format(
+      "key \"sample_rate_hz\": expected {:.6g} Hz as {}, found {:.6g} Hz (a {:.6g} s "
+      "step); they must agree within {:g} %",
+      1.0 / file_dt, what, rate, 1.0 / rate, 100.0 * kSampleRateTolerance);
+  if (options.dt_s) {
+    rec.warnings.push_back(
+        fmt::format("{}: {} (--dt {} s overrides both)", side, message, *options.dt_s));
+    return;
+  }
+  throw InputError(side, 0, "", message + ": correct the sidecar or the recording, or give --dt");
+}
+
 }  // namespace
 
 void resolve_time_base(Recording& rec, const ReadOptions& options) {
@@ -62,14 +92,16 @@ void resolve_time_base(Recording& rec, const ReadOptions& options) {
     rec.sampling = check_time_column(rec, options.jitter_tolerance);
     rec.dt_s = rec.sampling.dt_s;
   }
+  check_sidecar_rate(rec, options);
   if (options.dt_s) {
     if (!(*options.dt_s > 0.0) || !std::isfinite(*options.dt_s)) {
-      throw InputError(rec.source, 0, "", fmt::format("--dt: expected a sample period > 0 s, "
-                                                      "found {}", *options.dt_s));
+      throw InputError(
+          rec.source, 0, "",
+          fmt::format("--dt: expected a sample period > 0 s, found {}", *options.dt_s));
     }
     if (rec.sampling.has_time && std::abs(rec.dt_s - *options.dt_s) > 0.01 * *options.dt_s) {
-      rec.warnings.push_back(fmt::format("{}: --dt {} s overrides the time column's mean step "
-                                         "{} s", rec.source, *options.dt_s, rec.dt_s));
+      rec.warnings.push_back(fmt::format("{}: --dt {} s overrides the time column's mean step {} s",
+                                         rec.source, *options.dt_s, rec.dt_s));
     }
     rec.dt_s = *options.dt_s;
     rec.sampling.dt_s = rec.dt_s;

@@ -1,8 +1,6 @@
 #include "rig/io/sidecar.hpp"
 
 #include <cmath>
-#include <fstream>
-#include <sstream>
 
 #include "rig/io/atomic_file.hpp"
 #include "rig/io/input_error.hpp"
@@ -15,8 +13,9 @@ using nlohmann::json;
 double positive_number(const json& doc, const char* key, const std::string& source) {
   const json& v = doc.at(key);
   if (!v.is_number() || !std::isfinite(v.get<double>()) || v.get<double>() <= 0.0) {
-    throw InputError(source, 0, "", std::string("key \"") + key +
-                                        "\": expected a finite number > 0, found " + v.dump());
+    throw InputError(
+        source, 0, "",
+        std::string("key \"") + key + "\": expected a finite number > 0, found " + v.dump());
   }
   return v.get<double>();
 }
@@ -37,8 +36,9 @@ void read_units(const json& doc, const std::string& source, Sidecar& out) {
   }
   for (const auto& [column, unit] : v.items()) {
     if (!unit.is_string()) {
-      throw InputError(source, 0, "", "key \"units\": unit of \"" + column +
-                                          "\" must be a string, found " + unit.dump());
+      throw InputError(
+          source, 0, "",
+          "key \"units\": unit of \"" + column + "\" must be a string, found " + unit.dump());
     }
     out.units[column] = unit.get<std::string>();
   }
@@ -51,8 +51,8 @@ void read_coupled(const json& doc, const std::string& source, Sidecar& out) {
   }
   for (const json& name : v) {
     if (!name.is_string()) {
-      throw InputError(source, 0, "", "key \"coupled_columns\": expected strings, found " +
-                                          name.dump());
+      throw InputError(source, 0, "",
+                       "key \"coupled_columns\": expected strings, found " + name.dump());
     }
     out.coupled_columns.push_back(name.get<std::string>());
   }
@@ -72,9 +72,12 @@ Sidecar parse_sidecar(const json& doc, const std::string& source) {
   }
   Sidecar out;
   out.present = true;
+  out.source = source;
   out.raw = doc;
-  if (doc.contains("sample_rate_hz")) out.sample_rate_hz = positive_number(doc, "sample_rate_hz", source);
-  if (doc.contains("coupling_rc_s")) out.coupling_rc_s = positive_number(doc, "coupling_rc_s", source);
+  if (doc.contains("sample_rate_hz"))
+    out.sample_rate_hz = positive_number(doc, "sample_rate_hz", source);
+  if (doc.contains("coupling_rc_s"))
+    out.coupling_rc_s = positive_number(doc, "coupling_rc_s", source);
   if (doc.contains("units")) read_units(doc, source, out);
   if (doc.contains("coupled_columns")) read_coupled(doc, source, out);
   if (doc.contains("link")) out.link = text(doc, "link", source);
@@ -87,8 +90,8 @@ Sidecar parse_sidecar(const json& doc, const std::string& source) {
   }
   if (doc.contains("seed")) {
     if (!doc["seed"].is_number_unsigned()) {
-      throw InputError(source, 0, "", "key \"seed\": expected an unsigned integer, found " +
-                                          doc["seed"].dump());
+      throw InputError(source, 0, "",
+                       "key \"seed\": expected an unsigned integer, found " + doc["seed"].dump());
     }
     out.seed = doc["seed"].get<std::uint64_t>();
   }
@@ -96,13 +99,8 @@ Sidecar parse_sidecar(const json& doc, const std::string& source) {
 }
 
 Sidecar read_sidecar(const std::filesystem::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) {
-    throw InputError(path.string(), 0, "", "cannot open the sidecar file");
-  }
-  std::stringstream buffer;
-  buffer << in.rdbuf();
-  json doc = json::parse(buffer.str(), nullptr, /*allow_exceptions=*/false);
+  const std::string text = read_small_input_file(path, "a sidecar", kMaxSidecarBytes);
+  json doc = json::parse(text, nullptr, /*allow_exceptions=*/false);  // skips a UTF-8 BOM
   if (doc.is_discarded()) {
     throw InputError(path.string(), 0, "", "expected valid JSON (parse error)");
   }

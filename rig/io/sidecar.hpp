@@ -11,21 +11,30 @@
 //     "seed": 42                                   // unsigned integer
 //   }
 // Every key is optional; unknown keys are kept in `raw` and written back unchanged.
+//
+// A sample_rate_hz that contradicts the recording's own time base (its time column, or a
+// Ts/fs column) by more than 1 % is refused when the recording is read (recording.hpp).
+// The file must be a regular file of at most kMaxSidecarBytes; a UTF-8 byte-order mark is
+// allowed.
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
 #include <filesystem>
 #include <map>
+#include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
 #include <vector>
 
-#include <nlohmann/json.hpp>
-
 namespace rig::io {
+
+// Metadata holds a few hundred bytes; the bound only keeps a wrong file from filling memory.
+inline constexpr std::size_t kMaxSidecarBytes = 16u << 20;
 
 struct Sidecar {
   bool present = false;
+  std::string source;  // the file it was read from (for messages); not written back
   std::optional<double> sample_rate_hz;
   std::map<std::string, std::string> units;
   nlohmann::json operating_point = nlohmann::json::object();

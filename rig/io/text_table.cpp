@@ -6,10 +6,6 @@
 namespace rig::io::detail {
 namespace {
 
-bool is_blank(std::string_view s) {
-  return s.find_first_not_of(" \t\r\f\v") == std::string_view::npos;
-}
-
 std::string_view trim(std::string_view s) {
   const auto first = s.find_first_not_of(" \t\r");
   if (first == std::string_view::npos) return {};
@@ -20,33 +16,6 @@ std::string_view trim(std::string_view s) {
 }
 
 }  // namespace
-
-SplitText split_lines(std::string_view text) {
-  SplitText out;
-  long number = 0;
-  std::size_t pos = 0;
-  std::optional<long> pending_blank;
-  while (pos < text.size()) {
-    ++number;
-    const std::size_t end = text.find('\n', pos);
-    const bool terminated = end != std::string_view::npos;
-    std::string_view line = text.substr(pos, terminated ? end - pos : std::string_view::npos);
-    pos = terminated ? end + 1 : text.size();
-    if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
-    if (is_blank(line)) {
-      if (!pending_blank) pending_blank = number;
-      continue;
-    }
-    if (!terminated) {
-      out.partial_line = number;  // the writer always ends a row with '\n'
-      break;
-    }
-    if (pending_blank && !out.lines.empty() && !out.blank_inside) out.blank_inside = pending_blank;
-    pending_blank.reset();
-    out.lines.push_back({line, number});
-  }
-  return out;
-}
 
 char detect_separator(std::string_view first_line) {
   for (char c : {',', ';', '\t'}) {
@@ -62,6 +31,13 @@ char detect_separator(std::string_view first_line) {
 std::vector<std::string_view> split_fields(std::string_view line, char separator,
                                            bool strip_trailing) {
   std::vector<std::string_view> fields;
+  split_fields(line, separator, strip_trailing, fields);
+  return fields;
+}
+
+void split_fields(std::string_view line, char separator, bool strip_trailing,
+                  std::vector<std::string_view>& fields) {
+  fields.clear();
   if (separator == 0) {
     std::size_t pos = 0;
     while (true) {
@@ -72,7 +48,7 @@ std::vector<std::string_view> split_fields(std::string_view line, char separator
       if (end == std::string_view::npos) break;
       pos = end;
     }
-    return fields;
+    return;
   }
   std::string_view body = line;
   // Trailing blanks go, but not a trailing tab when the tab is the separator (an empty cell).
@@ -86,7 +62,6 @@ std::vector<std::string_view> split_fields(std::string_view line, char separator
     if (end == std::string_view::npos) break;
     pos = end + 1;
   }
-  return fields;
 }
 
 CellStatus parse_cell(std::string_view field, double& value) {

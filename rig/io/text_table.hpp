@@ -1,26 +1,12 @@
-// Low-level splitting of delimited text into lines and fields, shared by the recording and
-// FRF readers. Internal to rig/io.
+// Low-level splitting of delimited lines into fields, for the recording reader (which the FRF
+// reader uses too). Internal to rig/io.
 #pragma once
 
-#include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
 
 namespace rig::io::detail {
-
-struct Line {
-  std::string_view text;  // without the line end ("\n" or "\r\n")
-  long number = 0;        // 1-based line number in the file
-};
-
-struct SplitText {
-  std::vector<Line> lines;          // non-blank lines; trailing blank lines dropped
-  std::optional<long> partial_line; // number of a dropped unterminated last line
-  std::optional<long> blank_inside; // first blank line followed by more data
-};
-
-SplitText split_lines(std::string_view text);
 
 // ',' ';' or '\t' when the line contains one (in that order), else 0 = runs of whitespace.
 char detect_separator(std::string_view first_line);
@@ -29,6 +15,9 @@ char detect_separator(std::string_view first_line);
 // trailing separator (MATLAB writes one on every row) is removed first.
 std::vector<std::string_view> split_fields(std::string_view line, char separator,
                                            bool strip_trailing);
+// The same into `fields` (cleared first), so a reader can reuse one vector for every line.
+void split_fields(std::string_view line, char separator, bool strip_trailing,
+                  std::vector<std::string_view>& fields);
 
 enum class CellStatus { kOk, kEmpty, kNotNumber, kNotFinite };
 

@@ -178,6 +178,10 @@ json report_json(const SessionData& d) {
       {"quality_flags", d.excitation.quality_flags}};
   j["model_written"] = d.excitation.mmfm.has_value() && d.exit_code == kExitOk;
   j["model_rejected"] = d.model_rejected;
+  j["activation"] = d.activation ? json{{"acknowledged", d.activation->acknowledged},
+                                        {"status", d.activation->status},
+                                        {"waited_s", d.activation->waited_s}}
+                                 : json(nullptr);
   j["ramp_down"] = {{"attempted", d.ramp_down.attempted},
                     {"cleared", d.ramp_down.cleared},
                     {"reconnects", d.ramp_down.reconnects},

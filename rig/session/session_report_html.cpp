@@ -59,10 +59,24 @@ void summary(report::HtmlReport& page, const SessionData& d) {
     kv.push_back({"pilot", fmt::format("gain {:.1f} kW/%, excitation std {:.3f} %",
                                        d.pilot->gain_kw_per_pct, d.pilot->planned_std_pct)});
   }
-  if (d.excitation.duration_s > 0.0) {
-    kv.push_back({"excitation",
-                  fmt::format("{:.0f} s, {}", d.excitation.duration_s, d.excitation.stop_reason)});
+  if (d.activation) {
+    kv.push_back(
+        {"bias acknowledged", d.activation->acknowledged
+                                  ? fmt::format("yes, after {:.2f} s (status 0x{:04x})",
+                                                d.activation->waited_s, d.activation->status)
+                                  : fmt::format("NO within {:.2f} s (status 0x{:04x})",
+                                                d.activation->waited_s, d.activation->status)});
   }
+  if (d.excitation.duration_s > 0.0) {
+    const ExcitationResult& x = d.excitation;
+    kv.push_back(
+        {"excitation",
+         fmt::format("{:.0f} s, applied std {:.4f} % of {:.4f} % planned ({:.0f} %), {}",
+                     x.duration_s, x.applied_std_pct, x.planned_std_pct,
+                     x.planned_std_pct > 0 ? 100.0 * x.applied_std_pct / x.planned_std_pct : 0.0,
+                     x.stop_reason)});
+  }
+  if (!d.model_rejected.empty()) kv.push_back({"no model", d.model_rejected});
   if (d.excitation.mmfm && d.excitation.mmfm->derived.valid) {
     const auto& g = d.excitation.mmfm->derived;
     kv.push_back({"MMFM model", fmt::format("K {:.2f}+-{:.2f} kW/%, fn {:.3f}+-{:.3f} Hz, "
@@ -77,6 +91,16 @@ void summary(report::HtmlReport& page, const SessionData& d) {
     kv.push_back({"loop timing", loop_timing_text(*d.loop_timing)});
   }
   if (d.trip) kv.push_back({"trip", fmt::format("{}: {}", to_string(d.trip->cause), d.trip->text)});
+  if (d.ramp_down.attempted) {
+    kv.push_back({"ramp-down", d.ramp_down.cleared
+                                   ? fmt::format("bias at baseline, enable cleared{}",
+                                                 d.ramp_down.reconnects > 0
+                                                     ? fmt::format(" (after {} reconnection(s))",
+                                                                   d.ramp_down.reconnects)
+                                                     : std::string())
+                                   : "NOT confirmed: " + d.ramp_down.error +
+                                         " (the governor's heartbeat rule removes the bias)"});
+  }
   page.section("Summary").key_values(kv);
 }
 
