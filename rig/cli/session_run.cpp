@@ -27,6 +27,9 @@ void install_abort_handler() {
   sigemptyset(&sa.sa_mask);
   sigaction(SIGINT, &sa, nullptr);
   sigaction(SIGTERM, &sa, nullptr);
+  // A file grown past RLIMIT_FSIZE must fail its write (EFBIG, a rig failure the session ramps
+  // down from) instead of killing the rig with the bias still applied.
+  ::signal(SIGXFSZ, SIG_IGN);
 }
 
 // plantsim ticks every 1 ms (its default --tick).

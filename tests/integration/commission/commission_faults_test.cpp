@@ -153,6 +153,35 @@ TEST(CommissionFaults, UnusableOrEarlierOutExits2AndForceClearsIt) {
             std::string::npos);
 }
 
+// A disk that fills during the test (here the file-size limit of the rig's process, 300 kB:
+// about 25 s of rows) is a failure of the rig itself: a supervisor trip with its own cause,
+// the bias ramped down and the enable cleared, exit 4, and a recording that still reads.
+TEST(CommissionFaults, FullDiskMidTestIsARigFailureTripExit4) {
+  const auto dir = fresh_dir("disk-full");
+  const auto out = dir / "out";
+  const auto test = write_file(dir / "t.toml",
+                               "[steady_state]\nduration_s = 3.0\n[pilot]\nduration_s = 5.0\n"
+                               "[sweep]\nenabled = false\n");
+  const std::string cmd = fmt::format(
+      "bash -c 'ulimit -f 300; exec {} commission --emulate --quiet --test {} --out {}'",
+      (bin_dir() / "rig").string(), test.string(), out.string());
+  const int status = std::system((cmd + " > " + (dir / "rig.log").string() + " 2>&1").c_str());
+  ASSERT_TRUE(WIFEXITED(status)) << "killed: " << read_text(dir / "rig.log");
+  EXPECT_EQ(WEXITSTATUS(status), 4) << read_text(dir / "rig.log");
+  const auto report = read_json(out / "report.json");
+  EXPECT_EQ(report["safety"]["trip"]["cause"], "rig_failure");
+  EXPECT_EQ(report["ramp_down"]["cleared"], true);
+  EXPECT_EQ(report["model_written"], false);
+  const auto rec = io::read_recording(out / "recording.csv");  // whole rows only
+  EXPECT_GT(rec.rows(), 1000);
+  const std::string text = read_text(out / "recording.csv");
+  ASSERT_FALSE(text.empty());
+  EXPECT_EQ(text.back(), '\n');
+  const auto sidecar = read_json(out / "recording.json");
+  EXPECT_EQ(sidecar["complete"], false);
+  EXPECT_EQ(sidecar["rows"].get<long>(), static_cast<long>(rec.rows()));
+}
+
 TEST(CommissionFaults, LinkDropMidTestExit3AndRecordingReadable) {
   const auto dir = fresh_dir("drop");
   Background plant;
