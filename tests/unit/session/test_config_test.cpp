@@ -1,8 +1,10 @@
+#include "rig/session/test_config.hpp"
+
 #include <gtest/gtest.h>
 
 #include <string>
-
-#include "rig/session/test_config.hpp"
+#include <utility>
+#include <vector>
 
 namespace rig::session {
 namespace {
@@ -44,7 +46,8 @@ lags = 128
 from_hz = 0.2
 to_hz = 8.0
 points = 10
-)", "test.toml");
+)",
+                                       "test.toml");
   EXPECT_EQ(c.link.uri, "modbus+tcp://127.0.0.1:1502?unit=1");
   EXPECT_DOUBLE_EQ(c.link.sample_rate_hz, 50.0);
   EXPECT_DOUBLE_EQ(c.safety.band_pct, 2.5);
@@ -58,16 +61,15 @@ points = 10
 
 TEST(TestConfig, UnknownKeyIsNamedWithItsLine) {
   const std::string e = error_of("[excitation]\nbandwith_hz = 4\n");
-  EXPECT_NE(e.find("test.toml: excitation.bandwith_hz: unknown key (line 2)"),
-            std::string::npos) << e;
+  EXPECT_NE(e.find("test.toml: excitation.bandwith_hz: unknown key (line 2)"), std::string::npos)
+      << e;
   EXPECT_NE(error_of("[exitation]\n").find("exitation"), std::string::npos);
 }
 
 TEST(TestConfig, WrongTypeNamesTheKeyAndTheExpectedType) {
   const std::string e = error_of("[mmfm]\nlags = \"many\"\n");
   EXPECT_NE(e.find("mmfm.lags: expected an integer, got a string"), std::string::npos) << e;
-  EXPECT_NE(error_of("[safety]\nband_pct = true\n").find("expected a number"),
-            std::string::npos);
+  EXPECT_NE(error_of("[safety]\nband_pct = true\n").find("expected a number"), std::string::npos);
   EXPECT_NE(error_of("[excitation]\ntype = \"chirp\"\n").find("excitation.type"),
             std::string::npos);
 }
@@ -82,12 +84,37 @@ TEST(TestConfig, BandAboveThreePercentNeedsTheOverride) {
   EXPECT_DOUBLE_EQ(parse_test_toml("[safety]\nband_pct = 1.5\n", "t").safety.band_pct, 1.5);
 }
 
+// Every numeric key has an upper bound (docs/test-file.md "Safe ranges"): values a user
+// reported as accepted are refused with the key, the value and the bound.
+TEST(TestConfig, AbsurdValuesAreRefusedWithTheirBound) {
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {"[safety]\nclamp_pct = 1000\n", "safety.clamp_pct = 1000: must be at most 10"},
+      {"[safety]\nramp_pct_per_s = 1e9\n",
+       "safety.ramp_pct_per_s = 1000000000: must be at most 10"},
+      {"[link]\ntimeout_s = 1e12\n", "link.timeout_s = 1000000000000: must be at most 10"},
+      {"[link]\nsample_rate_hz = 1e9\n", "link.sample_rate_hz = 1000000000: must be at most 1000"},
+      {"[mmfm]\norder_n = 1000\n", "mmfm.order_n = 1000: must be at most 8"},
+      {"[safety]\necho_tolerance_pct = 5\n", "safety.echo_tolerance_pct = 5: must be at most 1"},
+      {"[mmfm]\nmin_applied_fraction = 2\n", "mmfm.min_applied_fraction = 2: must be at most 1"},
+      {"[safety]\nactivation_timeout_s = 0\n", "safety.activation_timeout_s = 0"},
+      {"[steady_state]\nduration_s = nan\n", "steady_state.duration_s = nan"},
+  };
+  for (const auto& [text, expected] : cases) {
+    const std::string e = error_of(text);
+    EXPECT_NE(e.find(expected), std::string::npos) << text << " -> " << e;
+    EXPECT_EQ(e.find('\n'), std::string::npos) << "one line: " << e;
+  }
+  // The bounds themselves are accepted.
+  EXPECT_EQ(error_of("[safety]\nclamp_pct = 10\nramp_pct_per_s = 10\n[link]\ntimeout_s = 10\n"
+                     "sample_rate_hz = 1000\n[mmfm]\norder_n = 8\norder_m = 0\n"),
+            "");
+}
+
 TEST(TestConfig, SweepAboveNyquistIsRefused) {
   const std::string e = error_of("[link]\nsample_rate_hz = 20\n[sweep]\nto_hz = 12\n");
   EXPECT_NE(e.find("sweep.to_hz = 12"), std::string::npos) << e;
   EXPECT_NE(e.find("Nyquist"), std::string::npos) << e;
-  EXPECT_NE(error_of("[sweep]\nfrom_hz = 3\nto_hz = 2\n").find("sweep.to_hz"),
-            std::string::npos);
+  EXPECT_NE(error_of("[sweep]\nfrom_hz = 3\nto_hz = 2\n").find("sweep.to_hz"), std::string::npos);
 }
 
 TEST(TestConfig, SyntaxErrorIsOneLineWithPosition) {
