@@ -54,12 +54,21 @@ LinkError LinkBase::not_configured(const std::string& call) const {
 
 // Linear ramp b_i = b0 (1 - i/N), N = ceil(|b0| / (rate * period)), so the governor never sees
 // a step larger than rate * period when the external bias is withdrawn. b0 is the bias the
-// governor holds now, read back (read_held_bias): after a refused or late write the last
-// acknowledged value is stale, and ramping from it would raise the bias again first. Only
-// when the governor cannot be asked is the last acknowledged write used.
+// governor applies now, read back (read_held_bias, kHeldBiasReads tries): after a refused or
+// late write the last acknowledged value is stale, and ramping from it would raise the bias
+// again first. When the governor cannot be asked, b0 is the last bias sent (what it holds if
+// that write landed late); the supervisor's ramp before this only ever moved the bias towards
+// the baseline, so that is never farther out than what the governor holds.
+constexpr int kHeldBiasReads = 3;
+
 LinkResult<void> LinkBase::deactivate() {
-  double start_pct = last_bias_pct_;
-  if (auto held = read_held_bias(); held) start_pct = held.value();
+  double start_pct = last_sent_pct_;
+  for (int i = 0; i < kHeldBiasReads; ++i) {
+    if (auto held = read_held_bias(); held) {
+      start_pct = held.value();
+      break;
+    }
+  }
   ramp_start_pct_ = start_pct;
   const double period_s = std::chrono::duration<double>(options_.ramp_period).count();
   const double step_pct = options_.ramp_rate_pct_per_s * period_s;

@@ -48,6 +48,9 @@ class LinkBase : public GovernorLink {
 
   LinkOptions options_;
   double last_bias_pct_ = 0.0;  // last bias written and acknowledged (after quantisation)
+  // Last bias sent, acknowledged or not: what the governor holds if that write landed (a late
+  // answer). Every link sets it before its write goes out.
+  double last_sent_pct_ = 0.0;
   double ramp_start_pct_ = 0.0;
 };
 

@@ -72,6 +72,7 @@ LinkResult<void> CanLink::send_command(double bias_pct, bool enable, const char*
   tx_counter_ = static_cast<std::uint8_t>((tx_counter_ + 1) & 0x0F);
   const bool tsc1 = uri_.can_command == CanCommand::kTsc1;
   const double applied_pct = j::quantise_bias_slot(bias_pct);
+  last_sent_pct_ = applied_pct;
   const can_frame f =
       tsc1 ? j::encode_tsc1({uri_.sync_rpm * (1.0 + applied_pct / 100.0), tx_counter_, !enable})
            : j::encode_rig_command({bias_pct, enable, tx_counter_});

@@ -101,6 +101,7 @@ LinkResult<void> FakeGovernorLink::configure() {
 LinkResult<void> FakeGovernorLink::send(double bias_pct, bool enable, const char* where) {
   if (auto e = unusable(where)) return *e;
   const double bias = quantised(bias_pct);
+  last_sent_pct_ = bias;
   const bool refused = in_force(faults_.refuse_writes_after_s);
   writes_.push_back(WriteRecord{t_s(), bias, enable, !refused});
   if (refused) {

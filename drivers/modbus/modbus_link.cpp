@@ -111,6 +111,7 @@ LinkResult<void> ModbusLink::write_holding(int first, int count, const std::uint
 LinkResult<void> ModbusLink::write(double bias_pct) {
   const std::int16_t raw = quantise_bias(bias_pct);
   const std::uint16_t regs[2] = {static_cast<std::uint16_t>(raw), ++heartbeat_};
+  last_sent_pct_ = bias_from_raw(raw);
   auto r = write_holding(map::kHoldBias, 2, regs);
   if (r) last_bias_pct_ = bias_from_raw(raw);
   return r;
@@ -121,6 +122,7 @@ LinkResult<void> ModbusLink::write_control(double bias_pct, bool enable, const c
   const std::int16_t raw = quantise_bias(bias_pct);
   const std::uint16_t regs[3] = {static_cast<std::uint16_t>(raw), ++heartbeat_,
                                  enable ? map::kControlEnableBias : std::uint16_t{0}};
+  last_sent_pct_ = bias_from_raw(raw);
   auto r = write_holding(map::kHoldBias, 3, regs);
   if (r) last_bias_pct_ = bias_from_raw(raw);
   return r;

@@ -130,6 +130,8 @@ int run_session(const SessionArgs& args, session::TestConfig config, const std::
   } else {
     print_summary(d, args.out_dir);
   }
+  // Scripts and people watching stderr see why it stopped in one line.
+  if (d.exit_code != kExitOk) fmt::print(stderr, "rig {}: {}\n", command, d.outcome);
   return d.exit_code;
 }
 

@@ -47,18 +47,22 @@ class PilotPhase final : public SupervisedPhase {
     const TestConfig& c = ctx.config;
     soft_ = soft_start_samples(ctx);
     n_ = soft_ + std::lround(c.pilot.duration_s * c.link.sample_rate_hz);
-    e_ = test_excitation(c, n_, c.pilot.amplitude_pct, c.excitation.seed + kPilotSeedOffset);
+    fade_n_ = std::lround(kFadeOutS * c.link.sample_rate_hz);
+    e_ = test_excitation(c, n_ + fade_n_, c.pilot.amplitude_pct,
+                         c.excitation.seed + kPilotSeedOffset);
     return true;
   }
 
   std::optional<double> request(RunContext& ctx, long k) override {
-    ctx.loop.status().eta_s = static_cast<double>(n_ - k) * ctx.dt_s();
-    if (k >= n_) return std::nullopt;
-    return e_(k);
+    ctx.loop.status().eta_s = static_cast<double>(n_ + fade_n_ - k) * ctx.dt_s();
+    if (k >= n_ + fade_n_) return std::nullopt;
+    // Faded out, so that the mode is not left swinging into the next phase (where the swing
+    // would inflate the gain the supervisor's cap learns at its soft start).
+    return e_(k) * (k < n_ ? 1.0 : fade_out(k - n_, fade_n_));
   }
 
   void consume(RunContext& ctx, const TickResult& r, long k) override {
-    if (k < soft_) return;  // scale still rising
+    if (k < soft_ || k >= n_) return;  // scale still rising, or fading out
     ctx.pilot_u.push_back(r.out.excitation_pct);
     ctx.pilot_y.push_back(r.sample->power_kw - ctx.p0_kw);
   }
@@ -87,7 +91,7 @@ class PilotPhase final : public SupervisedPhase {
   }
 
  private:
-  long soft_ = 0, n_ = 0;
+  long soft_ = 0, n_ = 0, fade_n_ = 0;
   Eigen::VectorXd e_;
 };
 

@@ -70,6 +70,33 @@ std::string format(const char* fmt, double a, double b = 0.0, double c = 0.0) {
 
 }  // namespace
 
+// The governor's status in words: the bits that trip, then the raw word.
+std::string Supervisor::status_text(std::uint16_t status) const {
+  struct Bit {
+    std::uint16_t mask;
+    const char* when_set;
+    const char* when_clear;
+  };
+  static constexpr Bit kBits[] = {
+      {drivers::kRunning, "", "the set is not running (bit 0 clear)"},
+      {drivers::kBreakerClosed, "", "the breaker is open (bit 1 clear)"},
+      {drivers::kBiasActive, "", "the external bias is no longer active (bit 2 clear)"},
+      {drivers::kHeartbeatLost, "the governor lost the heartbeat (bit 3)", ""},
+      {drivers::kPlantFault, "the governor reports a plant fault (bit 4)", ""},
+  };
+  std::string words;
+  for (const auto& b : kBits) {
+    const bool set = (status & b.mask) != 0;
+    const bool trips = set ? (config_.trip_status_mask & b.mask) != 0
+                           : (config_.required_status_mask & b.mask) != 0;
+    const char* text = set ? b.when_set : b.when_clear;
+    if (trips && *text) words += (words.empty() ? "" : ", ") + std::string(text);
+  }
+  char raw[40];
+  std::snprintf(raw, sizeof raw, " (status 0x%04x)", unsigned{status});
+  return (words.empty() ? std::string("governor status") : words) + raw;
+}
+
 void validate(const SupervisorConfig& c) {
   require(std::isfinite(c.p0_kw) && c.p0_kw > 0.0, "p0_kw must be a finite power > 0");
   require(c.band_fraction > 0.0 && c.band_fraction < 1.0, "band_fraction must be in (0, 1)");
@@ -193,11 +220,7 @@ void Supervisor::judge(const drivers::Sample& s) {
     trip(TripCause::kNotFinite, "power reading is not finite");
   } else if ((s.status & config_.trip_status_mask) != 0 ||
              (s.status & config_.required_status_mask) != config_.required_status_mask) {
-    char line[120];
-    std::snprintf(line, sizeof line, "governor status 0x%04x (fault mask 0x%04x, required 0x%04x)",
-                  unsigned{s.status}, unsigned{config_.trip_status_mask},
-                  unsigned{config_.required_status_mask});
-    trip(TripCause::kGovernorStatus, line);
+    trip(TripCause::kGovernorStatus, status_text(s.status));
   } else if (counter_backwards_) {
     trip(TripCause::kImplausible, format("sample counter went backwards to %.0f", s.counter));
   } else if (config_.plausible.speed && !(s.speed_rpm > 0.0)) {

@@ -194,6 +194,7 @@ class Supervisor {
  private:
   bool active() const;
   void judge(const drivers::Sample& sample);
+  std::string status_text(std::uint16_t status) const;
   void judge_echo(const drivers::Sample& sample);
   void judge_counter(const drivers::Sample& sample);
   SupervisorOutput command(double request_pct, double deviation_kw);
