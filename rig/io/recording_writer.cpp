@@ -37,10 +37,7 @@ RecordingWriter::RecordingWriter(std::filesystem::path csv, std::vector<std::str
     sidecar_.raw["complete"] = false;
     write_sidecar(sidecar_path(path_), sidecar_);
   }
-  {
-    std::lock_guard lock(mutex_);
-    flush_locked();
-  }
+  write_out();
   flusher_ = std::thread([this] { flusher_loop(); });
 }
 
@@ -67,7 +64,7 @@ void RecordingWriter::append(std::span<const double> row) {
   }
   buffer_ += '\n';
   ++rows_;
-  if (buffer_.size() > (1u << 16)) flush_locked();
+  if (buffer_.size() > (1u << 16)) wake_.notify_one();  // the flusher writes it
 }
 
 void RecordingWriter::append(std::initializer_list<double> row) {
@@ -75,48 +72,61 @@ void RecordingWriter::append(std::initializer_list<double> row) {
 }
 
 void RecordingWriter::flush() {
+  write_out();
   std::lock_guard lock(mutex_);
-  flush_locked();
   if (!error_.empty()) throw InputError(path_.string(), 0, "", error_);
 }
 
 // The buffer always ends at a line end, so each write(2) hands over whole rows. When the
 // disk fills in the middle of a row, the file is cut back to the last whole row, so that the
 // recording stays readable (DESIGN.md section 8).
-void RecordingWriter::flush_locked() {
-  if (fd_ < 0 || buffer_.empty() || !error_.empty()) return;
+void RecordingWriter::write_out() {
+  std::lock_guard io(io_mutex_);
+  std::string out;
+  {
+    std::lock_guard lock(mutex_);
+    if (fd_ < 0 || buffer_.empty() || !error_.empty()) return;
+    out.swap(buffer_);
+  }
   std::size_t done = 0;
-  while (done < buffer_.size()) {
-    const ssize_t n = ::write(fd_, buffer_.data() + done, buffer_.size() - done);
+  while (done < out.size()) {
+    const ssize_t n = ::write(fd_, out.data() + done, out.size() - done);
     if (n < 0 && errno == EINTR) continue;
     if (n <= 0) {
-      error_ = std::string("write failed: ") + std::strerror(n < 0 ? errno : ENOSPC);
-      const std::size_t whole = done == 0 ? 0 : buffer_.rfind('\n', done - 1);
-      const off_t keep =
-          committed_bytes_ +
-          (whole == std::string::npos || done == 0 ? 0 : static_cast<off_t>(whole + 1));
-      if (::ftruncate(fd_, keep) == 0) {
-        committed_bytes_ = keep;
-        if (done > 0 && whole != std::string::npos) {
-          lines_written_ += static_cast<std::size_t>(
-              std::count(buffer_.begin(), buffer_.begin() + static_cast<long>(whole + 1), '\n'));
-        }
-      }
+      const std::string error =
+          std::string("write failed: ") + std::strerror(n < 0 ? errno : ENOSPC);
+      cut_back(out, done);
+      std::lock_guard lock(mutex_);
+      error_ = error;
       return;
     }
     done += std::size_t(n);
   }
   committed_bytes_ += static_cast<off_t>(done);
-  lines_written_ += static_cast<std::size_t>(std::count(buffer_.begin(), buffer_.end(), '\n'));
-  buffer_.clear();
+  lines_written_ += static_cast<std::size_t>(std::count(out.begin(), out.end(), '\n'));
   if (options_.sync_to_disk) ::fdatasync(fd_);
+}
+
+// After a write that stopped `done` bytes into `out`: the file ends at the last whole row.
+void RecordingWriter::cut_back(const std::string& out, std::size_t done) {
+  const std::size_t whole = done == 0 ? std::string::npos : out.rfind('\n', done - 1);
+  const off_t keep =
+      committed_bytes_ + (whole == std::string::npos ? 0 : static_cast<off_t>(whole + 1));
+  if (::ftruncate(fd_, keep) != 0) return;
+  committed_bytes_ = keep;
+  if (whole != std::string::npos) {
+    lines_written_ += static_cast<std::size_t>(
+        std::count(out.begin(), out.begin() + static_cast<long>(whole + 1), '\n'));
+  }
 }
 
 void RecordingWriter::flusher_loop() {
   std::unique_lock lock(mutex_);
   while (!stopping_) {
     wake_.wait_for(lock, options_.flush_period);
-    flush_locked();
+    lock.unlock();
+    write_out();
+    lock.lock();
   }
 }
 
@@ -128,8 +138,9 @@ void RecordingWriter::close() {
   }
   wake_.notify_all();
   if (flusher_.joinable()) flusher_.join();
+  write_out();
+  std::lock_guard io(io_mutex_);
   std::lock_guard lock(mutex_);
-  flush_locked();
   ::close(fd_);
   fd_ = -1;
   if (options_.write_sidecar) {

@@ -2,8 +2,10 @@
 // readable" after a trip or a crash).
 //
 // Rows are formatted into a memory buffer and handed to the kernel with write(2) in whole
-// lines, at least every flush_period (a background thread flushes even when append() is not
-// called). After a kill -9 the file therefore holds every row up to the last flush; if the
+// lines, at least every flush_period, by a background thread. append() only formats under a
+// short lock and never waits for a write(2): a realtime tick loop cannot be held up by the disk
+// or by the flusher being descheduled (the buffer is swapped out under the lock and written
+// outside it). After a kill -9 the file therefore holds every row up to the last flush; if the
 // process dies inside write(2) the last line may be cut, and read_recording() drops an
 // unterminated last line with a warning. sync_to_disk adds fdatasync(2) per flush so that
 // the same holds after a power cut.
@@ -58,7 +60,8 @@ class RecordingWriter {
   const std::filesystem::path& path() const { return path_; }
 
  private:
-  void flush_locked();
+  void write_out();  // swaps the buffer out and writes it (io_mutex_ serialises writers)
+  void cut_back(const std::string& out, std::size_t done);
   void flusher_loop();
 
   std::filesystem::path path_;
@@ -71,7 +74,8 @@ class RecordingWriter {
   off_t committed_bytes_ = 0;      // file length at the last whole row handed to the kernel
   std::size_t lines_written_ = 0;  // whole lines in the file (header included)
   std::string error_;              // first write error, reported by the next append/flush
-  mutable std::mutex mutex_;
+  mutable std::mutex mutex_;       // buffer_, rows_, error_, stopping_
+  std::mutex io_mutex_;            // fd_ writes, committed_bytes_, lines_written_
   std::condition_variable wake_;
   bool stopping_ = false;
   std::thread flusher_;

@@ -1,4 +1,5 @@
 #include "rig/session/online_mmfm.hpp"
+#include "rig/session/thread_priority.hpp"
 
 #include <algorithm>
 #include <chrono>
@@ -102,7 +103,10 @@ std::optional<BlockEstimate> OnlineMmfm::push(double u_pct, double y_kw) {
 
 void OnlineMmfm::launch() {
   job_ = std::async(std::launch::async,
-                    [this, s = std::move(*pending_)]() { return refresh(s); });
+                    [this, s = std::move(*pending_)]() {
+                      use_normal_priority();  // started by the realtime loop's thread
+                      return refresh(s);
+                    });
   pending_.reset();
 }
 

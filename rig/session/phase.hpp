@@ -23,6 +23,7 @@
 #include "rig/session/live_view.hpp"
 #include "rig/session/session.hpp"
 #include "rig/session/supervisor.hpp"
+#include "rig/session/thread_priority.hpp"
 #include "rig/session/tick_loop.hpp"
 
 namespace rig::session {
@@ -70,7 +71,10 @@ class RunContext {
   template <class Fn>
   auto off_loop(Fn fn) -> decltype(fn()) {
     if (lockstep()) return fn();
-    auto done = std::async(std::launch::async, std::move(fn));
+    auto done = std::async(std::launch::async, [work = std::move(fn)]() mutable {
+      use_normal_priority();  // started by the realtime loop's thread
+      return work();
+    });
     while (done.wait_for(std::chrono::seconds(0)) != std::future_status::ready) loop.prime();
     return done.get();
   }

@@ -45,12 +45,12 @@ TickLoop::TickLoop(drivers::GovernorLink& link, const TestConfig& config,
 }
 
 namespace {
-// Realtime: the wait for the due time and the exchange run under SCHED_FIFO when the process
-// may use it (root or CAP_SYS_NICE), so that other work on the machine does not delay the
-// wake-ups; below a co-located plant simulator's priority (50). The processing between
-// exchanges (estimates taking tens of ms) runs at normal priority again, so that it cannot
-// starve the link's or the plant's other threads. Without the permission: normal scheduling
-// throughout; the report says which.
+// Realtime: the loop's thread runs under SCHED_FIFO when the process may use it (root or
+// CAP_SYS_NICE), so that other work on the machine delays neither its wake-ups nor the light
+// processing of a tick (supervisor, recorder, live view); below a co-located plant
+// simulator's priority (50). Everything heavy (block estimates, phase-change work) runs on
+// worker threads at normal priority (thread_priority.hpp). Without the permission: normal
+// scheduling throughout; the report says which.
 bool set_fifo(bool on) {
   sched_param param{};
   if (on) param.sched_priority = std::min(40, sched_get_priority_max(SCHED_FIFO));
@@ -95,8 +95,6 @@ void TickLoop::pace() {
     fifo_ = set_fifo(true);
     timer_.set_realtime_priority(fifo_);
     start_ = Clock::now();
-  } else if (fifo_) {
-    set_fifo(true);
   }
   const auto due =
       start_ + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(t_s()));
@@ -112,7 +110,6 @@ void TickLoop::pace() {
 
 void TickLoop::exchanged() {
   const auto now = std::chrono::steady_clock::now();
-  if (fifo_) set_fifo(false);
   timer_.exchange(std::chrono::duration<double>(now - cycle_start_).count());
 }
 
