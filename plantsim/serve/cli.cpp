@@ -1,6 +1,9 @@
 // Command-line parsing for `plantsim` (CLI11). Everything here only fills ServeOptions;
 // serve() in app.cpp does the work.
 #include <fmt/format.h>
+#include <signal.h>
+#include <sys/prctl.h>
+#include <unistd.h>
 
 #include <CLI/CLI.hpp>
 #include <iostream>
@@ -17,6 +20,7 @@ struct TextOptions {
   std::string tick = "1ms";
   std::string rig_address = "0xF9";
   std::string sample_period = "command";
+  bool exit_with_parent = false;
 };
 
 void add_options(CLI::App& app, ServeOptions& o, TextOptions& t) {
@@ -56,6 +60,9 @@ void add_options(CLI::App& app, ServeOptions& o, TextOptions& t) {
   app.add_option("--replay-column", o.replay_column, "Bias column of the replay input")
       ->default_str("u");
   app.add_flag("--readout", o.readout, "Print power, speed and bias once a second");
+  app.add_flag("--exit-with-parent", t.exit_with_parent,
+               "Stop (as on SIGTERM) when the process that started plantsim dies, so that a "
+               "crashed rig never leaves an emulated plant running");
   app.add_flag("--list-params", o.list_params,
                "Print every plant parameter (of --preset/--config) as TOML with units and "
                "ranges, and exit");
@@ -134,6 +141,11 @@ int plantsim_main(int argc, char** argv, const PlantHooks& hooks) {
   } catch (const ConfigError& e) {
     std::cerr << "plantsim: " << e.what() << "\n";
     return 2;
+  }
+  if (text.exit_with_parent) {
+    // The parent that started us (rig --emulate) dies: SIGTERM, the normal stop.
+    ::prctl(PR_SET_PDEATHSIG, SIGTERM);
+    if (::getppid() == 1) return 0;  // it died before prctl took effect
   }
   return serve(options, hooks);
 }

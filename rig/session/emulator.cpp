@@ -1,13 +1,12 @@
 #include "rig/session/emulator.hpp"
 
 #include <fcntl.h>
+#include <fmt/format.h>
 #include <poll.h>
 #include <signal.h>
 #include <spawn.h>
 #include <sys/wait.h>
 #include <unistd.h>
-
-#include <fmt/format.h>
 
 #include <array>
 #include <cerrno>
@@ -84,9 +83,8 @@ std::filesystem::path default_plantsim_path() {
 void EmulatedPlant::start_socat(const std::filesystem::path& dir) {
   const std::string plant = (dir / "plant").string();
   const std::string rig = (dir / "rig").string();
-  socat_pid_ = spawn({"/usr/bin/socat", "pty,raw,echo=0,link=" + plant,
-                      "pty,raw,echo=0,link=" + rig},
-                     -1);
+  socat_pid_ =
+      spawn({"/usr/bin/socat", "pty,raw,echo=0,link=" + plant, "pty,raw,echo=0,link=" + rig}, -1);
   for (int i = 0; i < 250; ++i) {
     if (std::filesystem::exists(plant) && std::filesystem::exists(rig)) return;
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
@@ -95,8 +93,9 @@ void EmulatedPlant::start_socat(const std::filesystem::path& dir) {
 }
 
 EmulatedPlant::EmulatedPlant(const EmulatorOptions& o) {
-  std::vector<std::string> args = {o.plantsim.string(), "--preset", o.preset, "--seed",
-                                   std::to_string(o.seed), "--clock", o.clock};
+  std::vector<std::string> args = {
+      o.plantsim.string(),    "--preset", o.preset, "--seed",
+      std::to_string(o.seed), "--clock",  o.clock,  "--exit-with-parent"};
   if (o.link_type == "modbus+tcp") {
     args.insert(args.end(), {"--modbus", "tcp://127.0.0.1:0"});
   } else if (o.link_type == "can+udp") {
@@ -118,7 +117,8 @@ EmulatedPlant::EmulatedPlant(const EmulatorOptions& o) {
     throw EmulatorError("plantsim executable not found at " + o.plantsim.string());
   }
   std::array<int, 2> fds{};
-  if (pipe2(fds.data(), O_CLOEXEC) != 0) throw EmulatorError("pipe: " + std::string(strerror(errno)));
+  if (pipe2(fds.data(), O_CLOEXEC) != 0)
+    throw EmulatorError("pipe: " + std::string(strerror(errno)));
   pid_ = spawn(args, fds[1]);
   close(fds[1]);
   try {
