@@ -233,5 +233,36 @@ TEST(CommissionFaults, OperatorAbortRampsDownAndKill9KeepsTheRecording) {
   kill(plant.pid, SIGTERM);
 }
 
+// DESIGN.md section 4: an emulated plant is never left running, even when the rig is killed
+// with no chance to stop it (plantsim --exit-with-parent).
+TEST(CommissionFaults, KilledEmulatingRigLeavesNoPlantRunning) {
+  const auto dir = fresh_dir("kill-emulate");
+  const Background rig = Background::start(
+      fmt::format("exec {} commission --emulate --clock realtime --quiet --out {}",
+                  (bin_dir() / "rig").string(), (dir / "out").string()),
+      dir / "rig.log");
+  // The plant is the rig's child; wait until it is up.
+  pid_t plant = -1;
+  for (int i = 0; i < 100 && plant < 0; ++i) {
+    std::this_thread::sleep_for(100ms);
+    const std::string children =
+        read_text(fmt::format("/proc/{}/task/{}/children", rig.pid, rig.pid));
+    if (!children.empty()) plant = std::stoi(children);
+  }
+  ASSERT_GT(plant, 0) << "no plantsim child: " << read_text(dir / "rig.log");
+  ASSERT_EQ(kill(plant, 0), 0);
+  kill(rig.pid, SIGKILL);
+  ASSERT_TRUE(rig.wait_gone(10s));
+  bool gone = false;
+  for (int i = 0; i < 50 && !gone; ++i) {
+    std::this_thread::sleep_for(100ms);
+    // Gone, or a zombie waiting for init to reap it.
+    const std::string stat = read_text(fmt::format("/proc/{}/stat", plant));
+    gone = stat.empty() || stat.find(") Z ") != std::string::npos;
+  }
+  EXPECT_TRUE(gone) << "plantsim " << plant << " still running after the rig was killed";
+  if (!gone) kill(plant, SIGKILL);
+}
+
 }  // namespace
 }  // namespace rig::testing
