@@ -21,6 +21,12 @@ ConstMap as_vector(const std::vector<double>& v) {
 void final_estimate(OnlineMmfm& online, double correction_s, ExcitationResult& out) {
   try {
     auto& m = out.mmfm.emplace(online.final_result());
+    out.order_choice = online.final_choice();
+    if (out.order_choice) {
+      for (auto& c : out.order_choice->candidates) {
+        c.model.delay_s = std::max(0.0, c.model.delay_s + correction_s);
+      }
+    }
     m.delay_s = std::max(0.0, m.delay_s + correction_s);
     m.model.delay_s = m.delay_s;
     if (!m.parameters.empty() && m.parameters.back().name == "delay_s") {
@@ -77,7 +83,10 @@ void analyse_excitation(OnlineMmfm& online, const ExcitationRecord& r, const Tes
   online.finish();
   out.duration_s = static_cast<double>(r.u_pct.size()) * r.dt_s;
   out.history = online.history();
-  for (auto& h : out.history) h.delay_s += r.timing_correction_s;
+  for (auto& h : out.history) {
+    h.delay_s += r.timing_correction_s;
+    if (h.ok) h.model.delay_s = h.delay_s;
+  }
   out.ruu = online.ruu();
   out.ryu = online.ryu();
   final_estimate(online, r.timing_correction_s, out);

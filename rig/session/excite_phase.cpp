@@ -32,7 +32,11 @@ OnlineMmfmOptions online_options(const TestConfig& c) {
   o.exponential = c.mmfm.averaging == "exponential";
   o.weight = c.mmfm.averaging_w;
   o.ac_coupling_rc_s = c.excitation.ac_coupling_rc_s;
-  o.target_rel_std_error = c.mmfm.target_rel_std_error;
+  if (c.mmfm.auto_order) o.orders = kAutoOrders;
+  o.compare_freqs_hz =
+      ident::log_frequencies_hz(c.compare.from_hz, c.compare.to_hz, kCompareFrequencies);
+  o.target_db = c.mmfm.target_db;
+  o.target_deg = c.mmfm.target_deg;
   // Realtime: a block estimate (tens of ms) must not delay the next exchange, so it runs on a
   // worker and the stopping rule sees it a few ticks later. Lockstep keeps it inside the tick
   // so that a seed gives the same recording.
@@ -46,17 +50,26 @@ class ExcitePhase final : public SupervisedPhase {
 
  protected:
   Phase code() const override { return Phase::kExcite; }
+  double peak_to_rms() const override { return peak_to_rms_; }
 
   bool prepare(RunContext& ctx) override {
     const TestConfig& c = ctx.config;
     const double rate = c.link.sample_rate_hz;
-    online_.emplace(online_options(c));
+    OnlineMmfmOptions oo = online_options(c);
+    if (ctx.shaped) oo.prior = ctx.shaped->pilot_model;
+    online_.emplace(oo);
     max_n_ = std::lround(c.mmfm.max_duration_s * rate);
     min_n_ = std::lround(c.mmfm.min_duration_s * rate);
     fade_n_ = std::lround(kFadeOutS * rate);
     k_stop_ = max_n_;
-    e_ = test_excitation(c, max_n_ + fade_n_, ctx.data.excitation.planned_std_pct,
-                         c.excitation.seed);
+    if (ctx.shaped) {
+      e_ = repeat_period(ctx.shaped->period_pct, max_n_ + fade_n_);
+      // The supervisor's statistical cap with the output's own crest factor.
+      peak_to_rms_ = kShapedGainMargin * ctx.shaped->output_crest;
+    } else {
+      e_ = test_excitation(c, max_n_ + fade_n_, ctx.data.excitation.planned_std_pct,
+                           c.excitation.seed);
+    }
     ctx.data.excitation.stop_reason = "maximum duration reached";
     record_.dt_s = ctx.dt_s();
     record_.timing_correction_s = ctx.timing_correction_s();
@@ -80,8 +93,10 @@ class ExcitePhase final : public SupervisedPhase {
       show_estimate(ctx, *est);
       if (!stop_ && online_->converged() && k >= min_n_) {
         stop_ = true;
-        ctx.data.excitation.stop_reason = fmt::format("every relative standard error below {:.3g}",
-                                                      ctx.config.mmfm.target_rel_std_error);
+        ctx.data.excitation.stop_reason = fmt::format(
+            "the model's 95 % band is within +-{:g} dB and +-{:g} deg over {:g}-{:g} Hz",
+            ctx.config.mmfm.target_db, ctx.config.mmfm.target_deg, ctx.config.compare.from_hz,
+            ctx.config.compare.to_hz);
       }
     }
   }
@@ -124,13 +139,16 @@ class ExcitePhase final : public SupervisedPhase {
     }
     est.push_back({"Td", e.delay_s + record_.timing_correction_s,
                    e.parameters.empty() ? 0.0 : e.parameters.back().std_error});
-    if (std::isfinite(e.max_rel_std_error)) est.push_back({"rse", e.max_rel_std_error, 0.0});
+    est.push_back({"order", static_cast<double>(e.order.n), 0.0});
+    if (std::isfinite(e.band_db95)) est.push_back({"+-dB", e.band_db95, 0.0});
+    if (std::isfinite(e.band_deg95)) est.push_back({"+-deg", e.band_deg95, 0.0});
   }
 
   std::optional<OnlineMmfm> online_;
   ExcitationRecord record_;
   Eigen::VectorXd e_;
   long max_n_ = 0, min_n_ = 0, fade_n_ = 0, k_stop_ = 0;
+  double peak_to_rms_ = kPeakFactor;
   bool stop_ = false;
 };
 

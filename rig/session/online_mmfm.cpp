@@ -1,5 +1,4 @@
 #include "rig/session/online_mmfm.hpp"
-#include "rig/session/thread_priority.hpp"
 
 #include <algorithm>
 #include <chrono>
@@ -7,60 +6,56 @@
 #include <limits>
 #include <stdexcept>
 
+#include "rig/session/thread_priority.hpp"
+
 namespace rig::session {
 namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-constexpr int kMinSpreadBlocks = 3;
 
-signal::StreamingOptions streaming(const OnlineMmfmOptions& o, bool per_block) {
+signal::StreamingOptions streaming(const OnlineMmfmOptions& o) {
   signal::StreamingOptions s;
   s.correlator = o.correlator;
   s.block_samples = o.block_samples;
-  if (per_block) {
-    s.averaging = signal::Averaging::kExponential;
-    s.weight = 1.0;  // R <- R_new: the last block alone
-  } else {
-    s.averaging = o.exponential ? signal::Averaging::kExponential : signal::Averaging::kCumulative;
-    s.weight = o.weight;
-  }
+  s.averaging = o.exponential ? signal::Averaging::kExponential : signal::Averaging::kCumulative;
+  s.weight = o.weight;
   return s;
 }
 
-// Robust spread of each component over the blocks: 1.4826 * median |x - median(x)| (equal
-// to the standard deviation for Gaussian scatter), so that one block spoilt by a transient
-// does not dominate the standard errors.
-template <class V>
-V robust_std(const std::vector<V>& xs) {
-  V out = xs.front();
-  std::vector<double> col(xs.size());
-  for (Eigen::Index j = 0; j < out.size(); ++j) {
-    for (std::size_t b = 0; b < xs.size(); ++b) col[b] = xs[b](j);
-    const auto mid = col.begin() + static_cast<std::ptrdiff_t>(col.size() / 2);
-    std::nth_element(col.begin(), mid, col.end());
-    const double median = *mid;
-    for (double& c : col) c = std::abs(c - median);
-    std::nth_element(col.begin(), mid, col.end());
-    out(j) = 1.4826 * *mid;
-  }
-  return out;
+Eigen::VectorXd to_vector(const std::vector<double>& v) {
+  return Eigen::Map<const Eigen::VectorXd>(v.data(), static_cast<Eigen::Index>(v.size()));
+}
+
+// Covariance of [a_n..a_0, b_m..b_0] (a_n = 1 fixed: zero row and column) from the asymptotic
+// one of [a_{n-1}..a_0, b_m..b_0 (, Td)], and the delay's standard error.
+std::pair<Eigen::MatrixXd, double> parameter_covariance(const ident::OrderCandidate& c,
+                                                        bool delay_estimated) {
+  const Eigen::Index p = c.order.n + c.order.m + 1;
+  Eigen::MatrixXd full = Eigen::MatrixXd::Zero(p + 1, p + 1);
+  full.bottomRightCorner(p, p) = c.covariance.topLeftCorner(p, p);
+  const double delay_sd = delay_estimated ? std::sqrt(std::max(0.0, c.covariance(p, p))) : 0.0;
+  return {full, delay_sd};
 }
 
 }  // namespace
 
 OnlineMmfm::OnlineMmfm(const OnlineMmfmOptions& options)
-    : options_(options), main_(streaming(options, false)), block_(streaming(options, true)) {
+    : options_(options), main_(streaming(options)) {
+  if (options_.orders.empty()) options_.orders = {options_.order};
+  if (options_.compare_freqs_hz.empty()) options_.compare_freqs_hz = ident::log_frequencies_hz(0.5, 5.0, 24);
   if (options.ac_coupling_rc_s > 0.0) {
     couple_u_.emplace(options.correlator.dt_s, options.ac_coupling_rc_s);
     couple_y_.emplace(options.correlator.dt_s, options.ac_coupling_rc_s);
   }
 }
 
-ident::MmfmOptions OnlineMmfm::mmfm_options() const {
-  ident::MmfmOptions m;
-  m.order = options_.order;
-  m.delay_s = options_.delay_s;
-  return m;
+ident::OrderChoiceOptions OnlineMmfm::choice_options() const {
+  ident::OrderChoiceOptions c;
+  c.orders = options_.orders;
+  c.delay_s = options_.delay_s;
+  c.compare_freqs_hz = options_.compare_freqs_hz;
+  c.prior = options_.prior;
+  return c;
 }
 
 std::optional<BlockEstimate> OnlineMmfm::push(double u_pct, double y_kw) {
@@ -75,20 +70,26 @@ std::optional<BlockEstimate> OnlineMmfm::push(double u_pct, double y_kw) {
     y_kw = couple_y_->step(y_kw);
   }
   main_.push(u_pct, y_kw);
-  block_.push(u_pct, y_kw);
+  u_.push_back(u_pct);
+  y_.push_back(y_kw);
   if (++in_block_ >= options_.block_samples) {
     in_block_ = 0;
-    if (!pending_) pending_.emplace();
-    pending_->block = ++blocks_done_;
-    pending_->t_s = static_cast<double>(main_.samples()) * options_.correlator.dt_s;
-    pending_->ruu = main_.ruu();
-    pending_->ryu = main_.ryu();
-    pending_->blocks.emplace_back(block_.ruu(), block_.ryu());
+    ++blocks_done_;
+    if (options_.exponential) {
+      // Keep the effective length of the exponential average, trimmed a block at a time.
+      const auto keep = static_cast<std::size_t>((2.0 * options_.weight - 1.0) *
+                                                 static_cast<double>(options_.block_samples));
+      if (u_.size() > keep + static_cast<std::size_t>(options_.block_samples)) {
+        const auto drop = static_cast<std::ptrdiff_t>(u_.size() - keep);
+        u_.erase(u_.begin(), u_.begin() + drop);
+        y_.erase(y_.begin(), y_.begin() + drop);
+      }
+    }
+    pending_ = snapshot();
     if (!options_.asynchronous) {
       const Snapshot s = std::move(*pending_);
       pending_.reset();
       history_.push_back(refresh(s));
-      spread_blocks_ = block_thetas_.size();
       return history_.back();
     }
   }
@@ -101,18 +102,27 @@ std::optional<BlockEstimate> OnlineMmfm::push(double u_pct, double y_kw) {
   return done;
 }
 
+OnlineMmfm::Snapshot OnlineMmfm::snapshot() const {
+  Snapshot s;
+  s.block = blocks_done_;
+  s.t_s = static_cast<double>(main_.samples()) * options_.correlator.dt_s;
+  s.ruu = main_.ruu();
+  s.ryu = main_.ryu();
+  s.u = to_vector(u_);
+  s.y = to_vector(y_);
+  return s;
+}
+
 void OnlineMmfm::launch() {
-  job_ = std::async(std::launch::async,
-                    [this, s = std::move(*pending_)]() {
-                      use_normal_priority();  // started by the realtime loop's thread
-                      return refresh(s);
-                    });
+  job_ = std::async(std::launch::async, [this, s = std::move(*pending_)]() {
+    use_normal_priority();  // started by the realtime loop's thread
+    return refresh(s);
+  });
   pending_.reset();
 }
 
 const BlockEstimate& OnlineMmfm::collect() {
   history_.push_back(job_.get());
-  spread_blocks_ = block_thetas_.size();
   return history_.back();
 }
 
@@ -121,90 +131,88 @@ void OnlineMmfm::finish() {
     if (!job_.valid()) launch();
     collect();
   }
+  // The final estimate covers every sample, also those after the last whole block, and
+  // starts cold (MMFM for every order) so that it does not depend on which blocks the
+  // worker happened to see.
+  if (blocks_done_ > 0) {
+    warm_.clear();
+    (void)refresh(snapshot());
+  }
 }
 
-// Runs on the worker in asynchronous mode: touches only the snapshot, the per-block state
-// and the (constant) options.
+// Runs on the worker in asynchronous mode: touches only the snapshot, the warm-start state,
+// the latest choice and the (constant) options.
 BlockEstimate OnlineMmfm::refresh(const Snapshot& s) {
   BlockEstimate e;
   e.block = s.block;
   e.t_s = s.t_s;
-  e.max_rel_std_error = kNaN;
+  e.band_db95 = e.band_deg95 = e.fit_pct = kNaN;
   try {
-    const ident::MmfmResult live = estimate_mmfm(s.ruu, s.ryu, mmfm_options());
-    block_corr_.insert(block_corr_.end(), s.blocks.begin(), s.blocks.end());
-    block_thetas_.clear();
-    block_derived_.clear();
-    for (const auto& [ruu, ryu] : block_corr_) {
-      try {
-        const ident::MmfmResult one =
-            ident::mmfm_solve(ruu, ryu, options_.order, live.delay_s, live.settings);
-        const ident::TransferFunction tf = ident::monic(one.model);
-        block_thetas_.push_back(ident::pack_parameters(tf));
-        const ident::DerivedFigures d = ident::derived_figures(tf, Eigen::MatrixXd());
-        block_derived_.emplace_back(d.gain, d.fn_hz, d.zeta);
-      } catch (const std::exception&) {
-        // A block too short or too noisy for these settings does not enter the spread.
+    ident::OrderChoice choice =
+        ident::choose_order(s.u, s.y, options_.correlator.dt_s, s.ruu, s.ryu, choice_options(), warm_);
+    for (const auto& c : choice.candidates) {
+      if (!c.ok) continue;
+      if (c.order == ident::ModelOrder{2, 0}) {
+        e.derived = ident::derived_figures(c.model, parameter_covariance(c, !options_.delay_s).first);
       }
     }
-    e.parameters = live.parameters;
-    e.derived = live.derived;
-    e.delay_s = live.delay_s;
-    e.correlation_fit_pct = live.correlation_fit_pct;
-    apply_spread(e.parameters, e.derived);
+    warm_ = choice.candidates;
+    const ident::OrderCandidate* best = choice.best();
+    if (best == nullptr) {
+      e.error = choice.candidates.front().error;
+      last_choice_ = std::move(choice);
+      return e;
+    }
+    const auto [cov, delay_sd] = parameter_covariance(*best, !options_.delay_s);
+    e.model = best->model;
+    e.order = best->order;
+    e.parameters = ident::parameter_table(best->model, cov, delay_sd);
+    e.delay_s = best->model.delay_s;
+    e.band_db95 = best->width.db;
+    e.band_deg95 = best->width.deg;
+    e.fit_pct = best->fit_pct;
     e.ok = true;
+    last_choice_ = std::move(choice);
   } catch (const std::exception& ex) {
     e.error = ex.what();
-    return e;
   }
-  // Free parameters: all but the leading denominator coefficient (fixed at 1) and the delay.
-  double worst = 0.0;
-  bool known = !e.parameters.empty();
-  for (std::size_t j = 1; j + 1 < e.parameters.size(); ++j) {
-    const auto& p = e.parameters[j];
-    const double rel = std::abs(p.std_error / p.value);
-    if (!std::isfinite(rel)) known = false;
-    worst = std::max(worst, rel);
-  }
-  e.max_rel_std_error = known ? worst : kNaN;
   return e;
 }
 
-void OnlineMmfm::apply_spread(std::vector<ident::ParameterEstimate>& params,
-                              ident::DerivedFigures& derived) const {
-  const auto blocks = static_cast<double>(block_thetas_.size());
-  if (blocks < kMinSpreadBlocks) return;
-  const double b_eff = options_.exponential ? std::min(blocks, 2.0 * options_.weight - 1.0)
-                                            : blocks;
-  const auto theta_std = robust_std(block_thetas_);
-  for (Eigen::Index j = 1; j < theta_std.size() && j + 1 < static_cast<Eigen::Index>(params.size());
-       ++j) {
-    params[static_cast<std::size_t>(j)].std_error = theta_std(j) / std::sqrt(b_eff);
-  }
-  const auto d_std = robust_std(block_derived_);
-  derived.gain_std = d_std(0) / std::sqrt(b_eff);
-  derived.fn_hz_std = d_std(1) / std::sqrt(b_eff);
-  derived.zeta_std = d_std(2) / std::sqrt(b_eff);
-}
-
 bool OnlineMmfm::converged() const {
-  if (history_.empty() || spread_blocks_ < kMinSpreadBlocks) return false;
+  if (history_.empty()) return false;
   const auto& last = history_.back();
-  return last.ok && std::isfinite(last.max_rel_std_error) &&
-         last.max_rel_std_error < options_.target_rel_std_error;
+  return last.ok && last.band_db95 <= options_.target_db && last.band_deg95 <= options_.target_deg;
 }
 
 ident::MmfmResult OnlineMmfm::final_result() const {
   if (job_.valid() || pending_) {
     throw std::logic_error("online MMFM: final_result() before finish()");
   }
-  if (main_.blocks() == 0 && main_.samples() < options_.correlator.lags) {
+  if (blocks_done_ == 0 || !last_choice_) {
     throw std::invalid_argument("online MMFM: no excitation block was completed");
   }
-  ident::MmfmResult r = estimate_mmfm(main_.ruu(), main_.ryu(), mmfm_options());
-  ident::DerivedFigures derived = r.derived;
-  apply_spread(r.parameters, derived);
-  r.derived = derived;
+  const ident::OrderCandidate* best = last_choice_->best();
+  if (best == nullptr) {
+    throw std::invalid_argument("online MMFM: no model structure could be fitted: " +
+                                last_choice_->candidates.front().error);
+  }
+  ident::MmfmOptions m;
+  m.order = best->order;
+  m.delay_s = best->model.delay_s;
+  const signal::Correlation ruu = main_.ruu(), ryu = main_.ryu();
+  ident::MmfmResult r = ident::estimate_mmfm(ruu, ryu, m);  // settings and equations
+  const bool delay_estimated = !options_.delay_s.has_value();
+  const auto [cov, delay_sd] = parameter_covariance(*best, delay_estimated);
+  r.model = best->model;
+  r.covariance = cov;
+  r.delay_s = best->model.delay_s;
+  r.delay_std_s = delay_sd;
+  r.parameters = ident::parameter_table(r.model, cov, delay_sd);
+  r.derived = ident::derived_figures(r.model, cov);
+  r.model_ryu = ident::model_cross_correlation(r.model, ruu, ryu);
+  r.correlation_fit_pct = ident::fit_percent(ryu.r, r.model_ryu.r);
+  r.refined = true;
   return r;
 }
 

@@ -1,22 +1,24 @@
 // Online MMFM (DESIGN.md section 2): every sample of the excitation phase goes through the
 // matched AC coupling (the same high-pass on excitation and response, MMFM.md section 6) into
-// streaming correlators; after every block the MMFM estimate is refreshed with standard
-// errors, and the stopping rule is checked.
+// streaming correlators and a record; after every block the model is refreshed and the
+// stopping rule is checked.
 //
-// Standard errors come from the spread of independent per-block estimates (batch means):
-//     se_j = s_b(theta_b,j) / sqrt(B_eff),  s_b = 1.4826 median|theta_b - median(theta_b)|,
-// B_eff = number of blocks for cumulative averaging, min(B, 2W - 1) for exponential
-// averaging of weight W (the variance of an exponential average of independent blocks is
-// 1/(2W - 1) of one block's). Until three blocks exist the estimator's analytic value is
-// used. The test may stop when every free parameter's se_j / |theta_j| is below the target.
+// The refresh (rig/ident/order_choice.hpp): each candidate order is started by MMFM from the
+// averaged correlations (later: from its previous fit) and refined by the time-domain output
+// error on the record; the simplest order whose response lies inside the 95 % band of every
+// more complex one is taken. Standard errors and the frequency-response band come from the
+// estimator's asymptotic covariance (rig/ident/frf_uncertainty.hpp), not from the spread of a
+// few block estimates. The stopping rule is in the user's units: the 95 % band of the
+// model's response over the compare frequencies within +-target_db and +-target_deg.
+// Exponential averaging of weight W keeps the last (2W - 1) blocks of the record (the
+// effective length of an exponential average of blocks), so memory stays bounded.
 //
-// Asynchronous mode (realtime loops): a block estimate takes tens of ms, longer than a
-// sample period, so push() only copies the block's correlations (a snapshot) and hands them
-// to one worker; the finished estimate is returned by a later push(). At most one estimate
-// is in flight; blocks completed meanwhile are queued in one pending snapshot (their
-// per-block correlations all enter the spread; the averaged correlations are the newest).
-// While a worker runs it alone touches the per-block state; the caller's thread reads it
-// only after collecting the result (future::get orders the two).
+// Asynchronous mode (realtime loops): a refresh takes tens to hundreds of ms, longer than a
+// sample period, so push() only copies what the refresh needs (a snapshot) and hands it to
+// one worker; the finished estimate is returned by a later push(). At most one estimate is
+// in flight; blocks completed meanwhile are covered by the next snapshot. While a worker runs
+// it alone touches the warm-start state; the caller's thread reads it only after collecting
+// the result (future::get orders the two).
 #pragma once
 
 #include <Eigen/Core>
@@ -27,21 +29,33 @@
 #include <vector>
 
 #include "rig/ident/mmfm.hpp"
+#include "rig/ident/order_choice.hpp"
 #include "rig/signal/ac_coupling.hpp"
 #include "rig/signal/streaming_correlator.hpp"
 
 namespace rig::session {
 
+// The candidates of the automatic order, simplest first: the thesis's second order, a third
+// pole (the governor and transducer lags that add to the dead time), a zero with it, and a
+// fourth pole (so that the third order's own bias shows in its widened band).
+inline const std::vector<ident::ModelOrder> kAutoOrders = {{2, 0}, {3, 0}, {3, 1}, {4, 1}};
+// Frequencies of the compare band where the stopping rule judges the response.
+inline constexpr int kCompareFrequencies = 24;
+
 struct OnlineMmfmOptions {
-  ident::ModelOrder order;
-  std::optional<double> delay_s;  // nullopt: estimated
+  ident::ModelOrder order;             // the structure when `orders` is empty
+  std::vector<ident::ModelOrder> orders;  // candidates, simplest first (automatic order)
+  std::optional<double> delay_s;       // nullopt: estimated
   signal::CorrelatorOptions correlator;
-  Eigen::Index block_samples = 2048;
-  bool exponential = false;       // else cumulative
-  double weight = 8.0;            // W of the exponential average
-  double ac_coupling_rc_s = 0.0;  // 0: no coupling
-  double target_rel_std_error = 0.05;
+  Eigen::Index block_samples = 1024;
+  bool exponential = false;            // else cumulative
+  double weight = 8.0;                 // W of the exponential average
+  double ac_coupling_rc_s = 0.0;       // 0: no coupling
+  std::vector<double> compare_freqs_hz;  // where the stopping rule judges the response
+  double target_db = 0.5;              // 95 % band half-widths of the stopping rule
+  double target_deg = 3.0;
   bool asynchronous = false;  // estimate on a worker thread (else inside push())
+  std::optional<ident::TransferFunction> prior;  // a start model for every order (pilot's)
 };
 
 // One refresh, after a block.
@@ -50,11 +64,14 @@ struct BlockEstimate {
   int block = 0;
   bool ok = false;                                   // false: the estimator failed on this block
   std::string error;                                 // why, when !ok
-  std::vector<ident::ParameterEstimate> parameters;  // live values with se (batch means)
-  ident::DerivedFigures derived;                     // gain, fn, zeta with se (second order)
+  ident::TransferFunction model;                     // the chosen structure, monic, with delay
+  ident::ModelOrder order;
+  std::vector<ident::ParameterEstimate> parameters;  // with asymptotic standard errors
+  ident::DerivedFigures derived;  // gain, fn, zeta with se of the second-order candidate
   double delay_s = 0.0;
-  double max_rel_std_error = 0.0;  // over the free parameters (NaN until known)
-  double correlation_fit_pct = 0.0;
+  double band_db95 = 0.0;   // widest 95 % half-band over the compare frequencies (NaN: unknown)
+  double band_deg95 = 0.0;
+  double fit_pct = 0.0;     // output-error fit on the record
 };
 
 class OnlineMmfm {
@@ -69,12 +86,15 @@ class OnlineMmfm {
   // converged() and final_result() then cover every completed block.
   void finish();
 
-  bool converged() const;  // latest finished estimate meets the target (and enough blocks)
+  bool converged() const;  // latest finished estimate's band is within the targets
   const std::vector<BlockEstimate>& history() const { return history_; }
-  // The estimate from the averaged correlations of the whole excitation (final model);
-  // std errors replaced by the batch-means values. Throws std::invalid_argument when no
-  // block has completed, std::logic_error while an estimate is in flight (call finish()).
+  // The estimate of the whole excitation (final model) as an MMFM result (settings and
+  // equations of the chosen order's MMFM start; model, covariance and errors of its
+  // output-error refinement). Throws std::invalid_argument when no block has completed or
+  // no candidate could be fitted, std::logic_error while an estimate is in flight.
   ident::MmfmResult final_result() const;
+  // The candidates of the final refresh (the order table), empty before one finished.
+  const std::optional<ident::OrderChoice>& final_choice() const { return last_choice_; }
   signal::Correlation ruu() const { return main_.ruu(); }
   signal::Correlation ryu() const { return main_.ryu(); }
   Eigen::Index samples() const { return main_.samples(); }
@@ -85,29 +105,24 @@ class OnlineMmfm {
     int block = 0;
     double t_s = 0.0;
     signal::Correlation ruu, ryu;  // averaged correlations
-    std::vector<std::pair<signal::Correlation, signal::Correlation>> blocks;  // new blocks
+    Eigen::VectorXd u, y;          // the record the estimate is fitted to
   };
   BlockEstimate refresh(const Snapshot& s);
   const BlockEstimate& collect();  // waits for the worker's estimate and records it
   void launch();                   // starts the pending snapshot on a worker
-  ident::MmfmOptions mmfm_options() const;
-  void apply_spread(std::vector<ident::ParameterEstimate>& params,
-                    ident::DerivedFigures& derived) const;
+  Snapshot snapshot() const;
+  ident::OrderChoiceOptions choice_options() const;
 
   OnlineMmfmOptions options_;
   std::optional<signal::AcCoupler> couple_u_, couple_y_;
   bool coupler_primed_ = false;
-  signal::StreamingCorrelator main_;   // averaged correlations (live and final estimate)
-  signal::StreamingCorrelator block_;  // this block only (W = 1), for the spread
+  signal::StreamingCorrelator main_;  // averaged correlations (start estimates)
+  std::vector<double> u_, y_;         // coupled record (exponential: the last N_eff samples)
   Eigen::Index in_block_ = 0;
-  // Per-block correlations, re-solved with the current live delay and settings at every
-  // refresh so that the spread reflects the data, not early automatic choices.
-  std::vector<std::pair<signal::Correlation, signal::Correlation>> block_corr_;
-  std::vector<Eigen::VectorXd> block_thetas_;   // parameters per block (current settings)
-  std::vector<Eigen::Vector3d> block_derived_;  // gain, fn, zeta per block
+  int blocks_done_ = 0;
+  std::vector<ident::OrderCandidate> warm_;  // latest fits per order (worker's state)
+  std::optional<ident::OrderChoice> last_choice_;  // of the latest finished estimate
   std::vector<BlockEstimate> history_;
-  int blocks_done_ = 0;              // completed blocks (estimated or not yet)
-  std::size_t spread_blocks_ = 0;    // block_thetas_.size() at the latest finished estimate
   std::optional<Snapshot> pending_;  // asynchronous: blocks awaiting the worker
   // Last member: destroyed first, so a running worker ends before the state it uses.
   std::future<BlockEstimate> job_;

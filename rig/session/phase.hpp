@@ -22,6 +22,7 @@
 #include "rig/io/recording_writer.hpp"
 #include "rig/session/live_view.hpp"
 #include "rig/session/session.hpp"
+#include "rig/session/shaped_excitation.hpp"
 #include "rig/session/supervisor.hpp"
 #include "rig/session/thread_priority.hpp"
 #include "rig/session/tick_loop.hpp"
@@ -46,6 +47,7 @@ class RunContext {
   bool acknowledged = false;             // the governor reported the bias active (layer 0 on)
   double resonance_hz = 2.0;             // dominant mode, from the MMFM model once known
   std::vector<double> pilot_u, pilot_y;  // the pilot record (prior for a sweep-only test)
+  std::optional<ShapedDesign> shaped;    // the shaped excitation designed after the pilot
 
   double dt_s() const { return loop.dt_s(); }
   bool lockstep() const { return config.link.lockstep_ticks > 0; }

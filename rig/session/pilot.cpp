@@ -41,7 +41,7 @@ PilotResult analyse_pilot(const std::vector<double>& u_pct, const std::vector<do
   o.band_kw = limits.band_kw;
   o.plan_fraction = limits.plan_fraction;
   o.k_sigma = kPeakFactor;
-  o.max_excitation_rms_pct = limits.clamp_pct / kExcitationClipSigma;
+  o.max_excitation_rms_pct = limits.clamp_pct / limits.input_crest;
   const AmplitudePlan plan = plan_excitation(r.gain_kw_per_pct, r.noise_std_kw, o);
   if (!plan.feasible) {
     r.reason = "pilot: " + plan.reason;

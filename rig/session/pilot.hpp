@@ -2,8 +2,8 @@
 // same excitation measures how much power deviation one % of bias produces,
 //   g = sqrt(max(var(y) - s_n^2, 0)) / std(u)   (kW per %, s_n: steady-state noise std),
 // and the main excitation's amplitude is planned by amplitude_plan.hpp so that the predicted
-// peak stays inside plan_fraction of the band, capped so that the clipped excitation
-// (3 sigma) stays within the command clamp.
+// peak stays inside plan_fraction of the band, capped so that the excitation's peak (its
+// crest factor times its std) stays within the command clamp.
 #pragma once
 
 #include <string>
@@ -32,6 +32,9 @@ struct PilotPlanLimits {
   double plan_fraction = 0.8;
   double clamp_pct = 5.0;
   double noise_std_kw = 0.0;
+  // Peak / std of the excitation: 3 for the Gaussian (clipped at 3 sigma), 1 for the PRBS;
+  // the planned std never lets the peak exceed the clamp.
+  double input_crest = kExcitationClipSigma;
 };
 
 PilotResult analyse_pilot(const std::vector<double>& u_pct, const std::vector<double>& y_kw,

@@ -2,6 +2,7 @@
 // measures the gain that plans the main excitation's amplitude (pilot.hpp).
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cmath>
 
 #include "rig/session/phase.hpp"
@@ -35,6 +36,9 @@ namespace {
 
 // The pilot's own noise sequence, distinct from the main excitation's.
 constexpr std::uint64_t kPilotSeedOffset = 7919;
+// The shaped excitation's lines cover the compare band with room on both sides.
+constexpr double kShapedLowFraction = 0.5;
+constexpr double kShapedHighFactor = 1.2;
 
 class PilotPhase final : public SupervisedPhase {
  public:
@@ -75,6 +79,7 @@ class PilotPhase final : public SupervisedPhase {
     limits.plan_fraction = c.safety.plan_fraction;
     limits.clamp_pct = c.safety.clamp_pct;
     limits.noise_std_kw = ctx.noise_kw();
+    limits.input_crest = c.excitation.type == ExcitationType::kPrbs ? 1.0 : kExcitationClipSigma;
     const PilotResult& p = ctx.data.pilot.emplace(
         ctx.off_loop([&] { return analyse_pilot(ctx.pilot_u, ctx.pilot_y, limits); }));
     if (!p.ok) {
@@ -82,6 +87,7 @@ class PilotPhase final : public SupervisedPhase {
       return false;
     }
     ctx.data.excitation.planned_std_pct = p.planned_std_pct;
+    if (c.excitation.type == ExcitationType::kShaped) plan_shaped(ctx);
     ctx.view.message(fmt::format(
         "pilot: gain {:.1f} kW/%, planned excitation std {:.3f} % (predicted peak {:.1f} of "
         "{:.1f} kW){}",
@@ -91,6 +97,35 @@ class PilotPhase final : public SupervisedPhase {
   }
 
  private:
+  // The shaped excitation from the pilot's model; on failure the test goes on with the
+  // Gaussian plan above, with a warning.
+  static void plan_shaped(RunContext& ctx) {
+    const TestConfig& c = ctx.config;
+    ShapedLimits l;
+    l.dt_s = ctx.dt_s();
+    l.band_kw = ctx.band_kw();
+    l.noise_std_kw = ctx.noise_kw();
+    l.clamp_pct = c.safety.clamp_pct;
+    l.f_lo_hz = kShapedLowFraction * c.compare.from_hz;
+    l.f_hi_hz = std::min(kShapedHighFactor * c.compare.to_hz, 0.4 * c.link.sample_rate_hz);
+    l.ac_coupling_rc_s = c.excitation.ac_coupling_rc_s;
+    l.seed = c.excitation.seed;
+    ShapedDesign d =
+        ctx.off_loop([&] { return design_shaped_excitation(ctx.pilot_u, ctx.pilot_y, l); });
+    if (!d.ok) {
+      ctx.loop.event("warning", "shaped excitation not designed (" + d.reason +
+                                    "); the Gaussian plan is used");
+      return;
+    }
+    ctx.data.excitation.planned_std_pct = d.std_pct;
+    ctx.view.message(fmt::format(
+        "shaped excitation: {} lines {:.2f}-{:.2f} Hz, std {:.3f} %, crest factor input {:.2f} "
+        "output {:.2f}, predicted peak {:.1f} of {:.1f} kW{}",
+        d.lines, d.f_lo_hz, d.f_hi_hz, d.std_pct, d.input_crest, d.output_crest,
+        d.predicted_peak_kw, l.band_kw, d.limited_by_clamp ? ", limited by the clamp" : ""));
+    ctx.shaped = std::move(d);
+  }
+
   long soft_ = 0, n_ = 0, fade_n_ = 0;
   Eigen::VectorXd e_;
 };

@@ -65,6 +65,7 @@ struct ExcitationResult {
   std::vector<std::string> quality_flags;  // fatal data-quality findings
   std::vector<BlockEstimate> history;      // one live estimate per block
   std::optional<ident::MmfmResult> mmfm;   // the final estimate
+  std::optional<ident::OrderChoice> order_choice;  // its candidate structures (order table)
   std::string mmfm_error;
   signal::Correlation ruu, ryu;   // online correlations (AC-coupled)
   std::vector<fra::FrfPoint> h1;  // noise-driven FRF of the excitation record

@@ -63,6 +63,31 @@ json frf_json(const std::vector<fra::FrfPoint>& frf) {
   return a;
 }
 
+json candidates_json(const std::optional<ident::OrderChoice>& choice) {
+  json a = json::array();
+  if (!choice) return a;
+  for (const auto& c : choice->candidates) {
+    json e = {{"order", {c.order.n, c.order.m}}, {"ok", c.ok}, {"error", c.error}};
+    if (c.ok) {
+      e["num"] = report::to_json_array(c.model.num);
+      e["den"] = report::to_json_array(c.model.den);
+      e["delay_s"] = c.model.delay_s;
+      e["fit_pct"] = number_or_null(c.fit_pct);
+      e["band_db95"] = number_or_null(c.width.db);
+      e["band_deg95"] = number_or_null(c.width.deg);
+      if (c.order.n == 2) {
+        // The thesis's q-form: 1 / (q2 s^2 + q1 s + q0) with b0 = 1, and K, fn, zeta.
+        const ident::TransferFunction q = ident::normalise(c.model, ident::Normalisation::kUnitB0);
+        e["q_form"] = {{"q2", q.den(0)}, {"q1", q.den(1)}, {"q0", q.den(2)}};
+        e["derived"] = derived_json(ident::derived_figures(c.model, Eigen::MatrixXd()));
+      }
+    }
+    e["chosen"] = choice->best() == &c;
+    a.push_back(e);
+  }
+  return a;
+}
+
 json history_json(const std::vector<BlockEstimate>& history) {
   json a = json::array();
   for (const auto& e : history) {
@@ -73,8 +98,14 @@ json history_json(const std::vector<BlockEstimate>& history) {
                  {"parameters", parameters_json(e.parameters)},
                  {"derived", derived_json(e.derived)},
                  {"delay_s", number_or_null(e.delay_s)},
-                 {"max_rel_std_error", number_or_null(e.max_rel_std_error)},
-                 {"correlation_fit_pct", number_or_null(e.correlation_fit_pct)}});
+                 {"order", {e.order.n, e.order.m}},
+                 {"num", e.ok ? json(std::vector<double>(e.model.num.begin(), e.model.num.end()))
+                              : json(nullptr)},
+                 {"den", e.ok ? json(std::vector<double>(e.model.den.begin(), e.model.den.end()))
+                              : json(nullptr)},
+                 {"band_db95", number_or_null(e.band_db95)},
+                 {"band_deg95", number_or_null(e.band_deg95)},
+                 {"fit_pct", number_or_null(e.fit_pct)}});
   }
   return a;
 }
@@ -97,7 +128,9 @@ json config_json(const TestConfig& c) {
           {"skip", c.mmfm.skip},
           {"correlator", c.mmfm.correlator},
           {"averaging", c.mmfm.averaging},
-          {"target_rel_std_error", c.mmfm.target_rel_std_error},
+          {"auto_order", c.mmfm.auto_order},
+          {"target_db", c.mmfm.target_db},
+          {"target_deg", c.mmfm.target_deg},
           {"sweep",
            {{"from_hz", c.sweep.from_hz},
             {"to_hz", c.sweep.to_hz},
@@ -195,7 +228,14 @@ json report_json(const SessionData& d) {
                  {"parameters", parameters_json(m.parameters)},
                  {"derived", derived_json(m.derived)},
                  {"condition_number", number_or_null(m.condition_number)},
-                 {"correlation_fit_pct", number_or_null(m.correlation_fit_pct)}};
+                 {"correlation_fit_pct", number_or_null(m.correlation_fit_pct)},
+                 {"candidates", candidates_json(d.excitation.order_choice)}};
+    if (d.excitation.order_choice && d.excitation.order_choice->best()) {
+      const auto& b = *d.excitation.order_choice->best();
+      j["mmfm"]["order"] = {b.order.n, b.order.m};
+      j["mmfm"]["band_db95"] = number_or_null(b.width.db);
+      j["mmfm"]["band_deg95"] = number_or_null(b.width.deg);
+    }
   } else {
     j["mmfm"] = nullptr;
   }

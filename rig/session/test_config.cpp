@@ -99,8 +99,10 @@ Binder excitation_type(ExcitationType& field) {
       field = ExcitationType::kGaussian;
     } else if (v == "prbs") {
       field = ExcitationType::kPrbs;
+    } else if (v == "shaped") {
+      field = ExcitationType::kShaped;
     } else {
-      r.fail(n, k, fmt::format("expected \"gaussian\" or \"prbs\", got \"{}\"", v));
+      r.fail(n, k, fmt::format("expected \"gaussian\", \"prbs\" or \"shaped\", got \"{}\"", v));
     }
   };
 }
@@ -175,7 +177,14 @@ std::map<std::string, Section> schema(TestConfig& c) {
                {"correlator", choice(c.mmfm.correlator, {"direct", "fft", "relay", "polarity"})},
                {"averaging", choice(c.mmfm.averaging, {"cumulative", "exponential"})},
                {"averaging_w", whole(c.mmfm.averaging_w)},
-               {"target_rel_std_error", num(c.mmfm.target_rel_std_error)},
+               {"auto_order", flag(c.mmfm.auto_order)},
+               {"target_db", num(c.mmfm.target_db)},
+               {"target_deg", num(c.mmfm.target_deg)},
+               {"target_rel_std_error",
+                [](const Reader& r, const toml::node& n, const std::string& k) {
+                  r.fail(n, k, "replaced by mmfm.target_db and mmfm.target_deg (the stopping "
+                               "rule is the model's 95 % band over the compare band)");
+                }},
                {"min_duration_s", num(c.mmfm.min_duration_s)},
                {"max_duration_s", num(c.mmfm.max_duration_s)},
                {"min_applied_fraction", num(c.mmfm.min_applied_fraction)}};
@@ -220,7 +229,12 @@ void bind_document(const toml::table& doc, TestConfig& config) {
 }  // namespace
 
 const char* to_string(ExcitationType type) {
-  return type == ExcitationType::kPrbs ? "prbs" : "gaussian";
+  switch (type) {
+    case ExcitationType::kPrbs: return "prbs";
+    case ExcitationType::kShaped: return "shaped";
+    case ExcitationType::kGaussian: break;
+  }
+  return "gaussian";
 }
 
 TestConfig parse_test_toml(const std::string& text, const std::string& source) {

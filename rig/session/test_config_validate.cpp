@@ -74,7 +74,8 @@ void check_excitation_and_mmfm(const TestConfig& c, const Checker& k) {
             "must be at least mmfm.lags");
   k.at_least("mmfm.skip", double(c.mmfm.skip), 1);
   k.at_least("mmfm.averaging_w", double(c.mmfm.averaging_w), 1);
-  k.positive("mmfm.target_rel_std_error", c.mmfm.target_rel_std_error);
+  k.positive("mmfm.target_db", c.mmfm.target_db);
+  k.positive("mmfm.target_deg", c.mmfm.target_deg);
   k.at_least("mmfm.min_duration_s", c.mmfm.min_duration_s, 0.0);
   k.require(c.mmfm.max_duration_s >= c.mmfm.min_duration_s && c.mmfm.max_duration_s > 0.0,
             "mmfm.max_duration_s", c.mmfm.max_duration_s,
@@ -152,7 +153,8 @@ void check_upper_bounds(const TestConfig& c, const Checker& k) {
       {"mmfm.block_size", double(c.mmfm.block_size), 1048576.0, "2^20 samples per block"},
       {"mmfm.skip", double(c.mmfm.skip), 64.0, "Fell's skip beyond 64 leaves too few products"},
       {"mmfm.averaging_w", double(c.mmfm.averaging_w), 1000.0, "blocks"},
-      {"mmfm.target_rel_std_error", c.mmfm.target_rel_std_error, 1.0, "100 %"},
+      {"mmfm.target_db", c.mmfm.target_db, 20.0, "a factor of ten"},
+      {"mmfm.target_deg", c.mmfm.target_deg, 90.0, "a quarter turn"},
       {"mmfm.min_duration_s", c.mmfm.min_duration_s, 86400.0, "a day"},
       {"mmfm.max_duration_s", c.mmfm.max_duration_s, 86400.0, "a day"},
       {"mmfm.min_applied_fraction", c.mmfm.min_applied_fraction, 1.0, "a share"},

@@ -1,0 +1,175 @@
+#include "rig/ident/order_choice.hpp"
+
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+
+#include "rig/ident/output_error.hpp"
+
+namespace rig::ident {
+namespace {
+
+constexpr double kZ95 = 1.959963984540054;
+
+int parameter_count(ModelOrder o) { return o.n + o.m + 1; }
+
+bool inside_band(const OrderCandidate& simple, const OrderCandidate& complex) {
+  for (std::size_t i = 0; i < simple.band.size() && i < complex.band.size(); ++i) {
+    const auto& s = simple.band[i];
+    const auto& c = complex.band[i];
+    const double d_deg = std::remainder(s.phase_deg - c.phase_deg, 360.0);
+    if (std::abs(s.mag_db - c.mag_db) > kZ95 * c.sd_db) return false;
+    if (std::abs(d_deg) > kZ95 * c.sd_deg) return false;
+  }
+  return true;
+}
+
+// A pole this many times faster than the fastest pole of the simpler model, added so that a
+// nested start has (almost) the simpler model's response and cost.
+constexpr double kNestedPoleFactor = 10.0;
+
+// The simpler model with one more pole (far above its own) or one more numerator
+// coefficient (zero): the richer structure started where the simpler one ended, so that its
+// fit can only improve on it.
+std::optional<TransferFunction> nested_start(const TransferFunction& simpler, ModelOrder order) {
+  const TransferFunction m = monic(simpler);
+  const int n = m.order(), nb = static_cast<int>(m.num.size()) - 1;
+  if (order.n < n || order.m < nb || order.n - n > 1 || order.m - nb > 1) return std::nullopt;
+  TransferFunction t = m;
+  if (order.n == n + 1) {
+    const double fastest = m.poles().cwiseAbs().maxCoeff();
+    const double p = kNestedPoleFactor * std::max(fastest, 1.0);
+    Eigen::VectorXd den = Eigen::VectorXd::Zero(n + 2);
+    den.head(n + 1) += m.den;  // s * A(s)
+    den.tail(n + 1) += p * m.den;  // + p A(s)
+    t.den = den;
+    t.num = p * m.num;
+  }
+  if (order.m == nb + 1) {
+    Eigen::VectorXd num = Eigen::VectorXd::Zero(nb + 2);
+    num.tail(nb + 1) = t.num;
+    t.num = num;
+  }
+  return monic(t);
+}
+
+// Start models for one order: its previous fit, MMFM on the correlations, and the nested
+// extension of every simpler candidate already fitted.
+std::vector<TransferFunction> start_models(const signal::Correlation& ruu,
+                                           const signal::Correlation& ryu, ModelOrder order,
+                                           const OrderChoiceOptions& o,
+                                           const std::vector<OrderCandidate>& warm,
+                                           const std::vector<OrderCandidate>& simpler) {
+  std::vector<TransferFunction> starts;
+  for (const auto& w : warm) {
+    if (w.ok && w.order == order) starts.push_back(w.model);
+  }
+  if (starts.empty()) {
+    try {
+      MmfmOptions m = o.mmfm;
+      m.order = order;
+      m.delay_s = o.delay_s;
+      m.refine = false;
+      starts.push_back(estimate_mmfm(ruu, ryu, m).model);
+    } catch (const std::exception&) {
+      // No MMFM start for this order: the nested starts remain.
+    }
+  }
+  for (const auto& c : simpler) {
+    if (!c.ok) continue;
+    if (auto t = nested_start(c.model, order)) starts.push_back(*t);
+  }
+  if (o.prior) {
+    std::optional<TransferFunction> t = monic(*o.prior);
+    // Up one pole or one zero at a time until the order is reached.
+    while (t && !(ModelOrder{t->order(), static_cast<int>(t->num.size()) - 1} == order)) {
+      const ModelOrder now{t->order(), static_cast<int>(t->num.size()) - 1};
+      t = nested_start(*t, {std::min(order.n, now.n + 1), std::min(order.m, now.m + 1)});
+    }
+    if (t) starts.push_back(*t);
+  }
+  return starts;
+}
+
+OrderCandidate fit_one(const Eigen::VectorXd& u, const Eigen::VectorXd& y, double dt_s,
+                       const std::vector<TransferFunction>& starts, ModelOrder order,
+                       const OrderChoiceOptions& o) {
+  OrderCandidate c;
+  c.order = order;
+  try {
+    if (starts.empty()) throw std::runtime_error("no start model for this structure");
+    const bool delay_free = !o.delay_s.has_value();
+    double best_cost = std::numeric_limits<double>::infinity();
+    for (TransferFunction start : starts) {
+      if (o.delay_s) start.delay_s = *o.delay_s;
+      const OutputErrorFit fit = refine_output_error(u, y, dt_s, start, delay_free);
+      if (fit.cost < best_cost && fit.model.is_stable()) best_cost = fit.cost, c.model = fit.model;
+    }
+    if (!std::isfinite(best_cost)) throw std::runtime_error("no stable model");
+    const InputNoiseSpectra s = input_noise_spectra(u, y, dt_s, c.model, o.spectrum_half_width);
+    c.covariance = asymptotic_covariance(c.model, s, static_cast<double>(u.size()), delay_free);
+    c.band = frf_uncertainty(c.model, c.covariance, o.compare_freqs_hz, delay_free);
+    c.width = worst_band95(c.band);
+    c.cost = best_cost;
+    c.fit_pct = fit_percent(y, simulate(c.model, u, dt_s));
+    c.ok = std::isfinite(c.width.db) && std::isfinite(c.width.deg);
+    if (!c.ok) c.error = "the data do not determine this structure";
+  } catch (const std::exception& e) {
+    c.ok = false;
+    c.error = e.what();
+  }
+  return c;
+}
+
+}  // namespace
+
+int simplest_adequate(const std::vector<OrderCandidate>& cands) {
+  for (std::size_t i = 0; i < cands.size(); ++i) {
+    if (!cands[i].ok) continue;
+    bool adequate = true;
+    for (std::size_t j = 0; j < cands.size() && adequate; ++j) {
+      if (j == i || !cands[j].ok) continue;
+      if (parameter_count(cands[j].order) <= parameter_count(cands[i].order)) continue;
+      adequate = inside_band(cands[i], cands[j]);
+    }
+    if (adequate) return static_cast<int>(i);
+  }
+  return -1;
+}
+
+void widen_by_richer(OrderChoice& choice) {
+  OrderCandidate* best = choice.chosen < 0 ? nullptr : &choice.candidates[static_cast<std::size_t>(choice.chosen)];
+  if (best == nullptr) return;
+  BandWidth95 w = best->width;
+  for (const auto& c : choice.candidates) {
+    if (!c.ok || parameter_count(c.order) <= parameter_count(best->order)) continue;
+    for (std::size_t i = 0; i < best->band.size() && i < c.band.size(); ++i) {
+      const auto& b = best->band[i];
+      const auto& r = c.band[i];
+      w.db = std::max(w.db, std::abs(b.mag_db - r.mag_db) + kZ95 * r.sd_db);
+      w.deg = std::max(w.deg, std::abs(std::remainder(b.phase_deg - r.phase_deg, 360.0)) +
+                                  kZ95 * r.sd_deg);
+    }
+  }
+  best->width = w;
+}
+
+OrderChoice choose_order(const Eigen::VectorXd& u, const Eigen::VectorXd& y, double dt_s,
+                         const signal::Correlation& ruu, const signal::Correlation& ryu,
+                         const OrderChoiceOptions& options,
+                         const std::vector<OrderCandidate>& warm) {
+  if (u.size() != y.size()) throw std::invalid_argument("choose_order: u and y lengths differ");
+  if (options.orders.empty() || options.compare_freqs_hz.empty()) {
+    throw std::invalid_argument("choose_order: no candidate orders or no compare frequencies");
+  }
+  OrderChoice out;
+  for (const ModelOrder& order : options.orders) {
+    const auto starts = start_models(ruu, ryu, order, options, warm, out.candidates);
+    out.candidates.push_back(fit_one(u, y, dt_s, starts, order, options));
+  }
+  out.chosen = simplest_adequate(out.candidates);
+  widen_by_richer(out);
+  return out;
+}
+
+}  // namespace rig::ident
