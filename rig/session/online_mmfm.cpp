@@ -139,7 +139,7 @@ BlockEstimate OnlineMmfm::refresh(const Snapshot& s) {
       try {
         const ident::MmfmResult one =
             ident::mmfm_solve(ruu, ryu, options_.order, live.delay_s, live.settings);
-        const ident::TransferFunction tf = ident::monic(one.model);
+        const model::TransferFunction tf = model::monic(one.model);
         block_thetas_.push_back(ident::pack_parameters(tf));
         const ident::DerivedFigures d = ident::derived_figures(tf, Eigen::MatrixXd());
         block_derived_.emplace_back(d.gain, d.fn_hz, d.zeta);

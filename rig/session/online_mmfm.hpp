@@ -33,7 +33,7 @@
 namespace rig::session {
 
 struct OnlineMmfmOptions {
-  ident::ModelOrder order;
+  model::ModelOrder order;
   std::optional<double> delay_s;  // nullopt: estimated
   signal::CorrelatorOptions correlator;
   Eigen::Index block_samples = 2048;
