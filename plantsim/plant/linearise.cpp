@@ -56,18 +56,18 @@ void fit_tf(LinearModel* lm) {
   for (int n = 2; n <= 10; ++n) {
     for (int m = 0; m < n; ++m) {
       LinearModel trial = *lm;
-      if (!fit_rational(f, g, n, m, &trial.num, &trial.den)) continue;
+      if (!fit_rational(f, g, n, m, &trial.tf.num, &trial.tf.den)) continue;
       double err_db = 0.0, err_deg = 0.0;
       for (int i = 0; i < kPoints; ++i) {
-        const std::complex<double> e = std::log(trial.tf_response(f[i]) / lm->response(f[i]));
+        const std::complex<double> e = std::log(trial.tf.response(f[i]) / lm->response(f[i]));
         err_db = std::max(err_db, std::abs(e.real()) * 20.0 / std::log(10.0));
         err_deg = std::max(err_deg, std::abs(e.imag()) * 180.0 / std::numbers::pi);
       }
       const double score = std::max(err_db / kTolDb, err_deg / kTolDeg);
       if (score < best) {
         best = score;
-        lm->num = trial.num;
-        lm->den = trial.den;
+        lm->tf.num = trial.tf.num;
+        lm->tf.den = trial.tf.den;
         lm->tf_max_error_db = err_db;
         lm->tf_max_error_deg = err_deg;
       }
@@ -81,11 +81,7 @@ void fit_tf(LinearModel* lm) {
 
 // The electromechanical mode: the least damped complex pole pair of den.
 void mode_of(LinearModel* lm) {
-  const Eigen::Index n = lm->den.size() - 1;
-  Eigen::MatrixXd comp = Eigen::MatrixXd::Zero(n, n);
-  for (Eigen::Index i = 0; i < n; ++i) comp(0, i) = -lm->den[i + 1] / lm->den[0];
-  for (Eigen::Index i = 1; i < n; ++i) comp(i, i - 1) = 1.0;
-  const Eigen::VectorXcd poles = comp.eigenvalues();
+  const Eigen::VectorXcd poles = lm->tf.poles();
   lm->zeta = INFINITY;
   for (const auto& p : poles) {
     if (std::abs(p.imag()) < 1e-9) continue;
@@ -141,14 +137,6 @@ std::complex<double> LinearModel::response(double freq_hz) const {
   return (c.cast<std::complex<double>>() * x)(0);
 }
 
-std::complex<double> LinearModel::tf_response(double freq_hz) const {
-  const std::complex<double> s{0.0, kTwoPi * freq_hz};
-  std::complex<double> nv{0.0, 0.0}, dv{0.0, 0.0};
-  for (Eigen::Index k = 0; k < num.size(); ++k) nv = nv * s + num[k];
-  for (Eigen::Index k = 0; k < den.size(); ++k) dv = dv * s + den[k];
-  return nv / dv * std::exp(-s * delay_s);
-}
-
 LinearModel linearise(const PlantOptions& options) {
   const ResolvedConfig config = resolve(options);
   return linearise(config.params,
@@ -169,6 +157,7 @@ LinearModel linearise(const Params& params, const std::string& name) {
   lm.c_fuel[GensetModel::kGov + Degov1::kXf] = 1.0;  // rack = actuator (no backlash)
   drop_frozen_states(&lm);
   lm.delay_s = dead_time_s(params);
+  lm.tf.delay_s = lm.delay_s;
   lm.dc_gain_kw_per_pct = lm.response(0.0).real();
   fit_tf(&lm);
   mode_of(&lm);

@@ -17,6 +17,7 @@
 
 #include "plantsim/plant/parameters.hpp"
 #include "plantsim/plant/plant.hpp"
+#include "rig/model/transfer_function.hpp"
 
 namespace plantsim {
 
@@ -40,7 +41,9 @@ struct LinearModel {
   Eigen::RowVectorXd c_fuel;  // rack position, pu
   double delay_s = 0.0;       // fuel dead time
 
-  Eigen::VectorXd num, den;  // rational part, highest power first, den monic
+  // The model file's TF: the rational part num/den (highest power first, den monic) with
+  // e^{-s delay_s}; its response, simulation and JSON are rig_model's (DESIGN.md section 3).
+  rig::model::TransferFunction tf;
   double fit_band_lo_hz = 0.0, fit_band_hi_hz = 0.0;
   double tf_max_error_db = 0.0, tf_max_error_deg = 0.0;
 
@@ -50,20 +53,16 @@ struct LinearModel {
   SopdtFit sopdt;  // best SOPDT over 0.5-5 Hz
   std::string preset;
 
-  std::complex<double> response(double freq_hz) const;     // exact, delay in the loop
-  std::complex<double> tf_response(double freq_hz) const;  // num/den e^{-s delay}
+  std::complex<double> response(double freq_hz) const;  // exact, delay in the loop
 };
 
 LinearModel linearise(const PlantOptions& options);
 LinearModel linearise(const Params& params, const std::string& name);
-// {"type":"tf","num","den","delay_s","input":"bias_pct","output":"power_kw","units",...}
+// The model file of DESIGN.md section 5 (rig::model::write_model): model.tf with
+// "input":"bias_pct", "output":"power_kw", "units", and "source" and "derived" (how it was
+// obtained, the mode, the DC gain and the SOPDT fit). Throws rig::model::InputError when the
+// file cannot be written.
 void write_tf_json(const LinearModel& model, const std::filesystem::path& file);
-
-// Step response of num/den e^{-s delay} to a step of `amplitude` at t = t_step_s, sampled at
-// k dt_s (k = 0..n-1); exact (matrix exponential of the companion form).
-Eigen::VectorXd tf_step_response(const Eigen::VectorXd& num, const Eigen::VectorXd& den,
-                                 double delay_s, double amplitude, double t_step_s, double dt_s,
-                                 int n);
 
 // Rational fit of g(jw) on freqs_hz: num order m, den order n (den(0) = 1 before making it
 // monic). Returns false if the fit failed (singular or unstable).

@@ -12,10 +12,10 @@
 
 #include "rig/cli/session_commands.hpp"
 #include "rig/io/exit_code.hpp"
-#include "rig/io/frf_file.hpp"
 #include "rig/io/input_error.hpp"
-#include "rig/io/model_file.hpp"
 #include "rig/io/out_dir.hpp"
+#include "rig/model/frf_file.hpp"
+#include "rig/model/model_file.hpp"
 #include "rig/report/bode_chart.hpp"
 #include "rig/report/html_report.hpp"
 #include "rig/report/json_out.hpp"
@@ -29,19 +29,6 @@ struct CompareArgs {
   bool json = false;
   bool force = false;
 };
-
-std::vector<fra::FrfPoint> frf_points(const io::Frf& f) {
-  std::vector<fra::FrfPoint> pts;
-  for (Eigen::Index i = 0; i < f.size(); ++i) {
-    fra::FrfPoint p;
-    p.freq_hz = f.freq_hz(i);
-    p.mag = f.mag(i);
-    p.phase_deg = f.phase_deg(i);
-    p.coherence = f.coherence(i);
-    pts.push_back(p);
-  }
-  return pts;
-}
 
 nlohmann::json result_json(const CompareArgs& a, const fra::CompareResult& r) {
   nlohmann::json rows = nlohmann::json::array();
@@ -72,8 +59,8 @@ nlohmann::json result_json(const CompareArgs& a, const fra::CompareResult& r) {
           {"rows", rows}};
 }
 
-void write_html(const CompareArgs& a, const ident::TransferFunction& tf,
-                const std::vector<fra::FrfPoint>& pts, const fra::CompareResult& r) {
+void write_html(const CompareArgs& a, const model::TransferFunction& tf,
+                const std::vector<model::FrfPoint>& pts, const fra::CompareResult& r) {
   std::vector<double> f;
   std::vector<std::complex<double>> model, measured;
   for (const auto& p : pts) {
@@ -101,13 +88,14 @@ void write_html(const CompareArgs& a, const ident::TransferFunction& tf,
 
 int run_compare(const CompareArgs& a) {
   io::prepare_out_dir(a.out, a.force);
-  const io::ModelFile model = io::read_model(a.model);
-  const io::Frf frf = io::read_frf(a.frf);
-  const auto pts = frf_points(frf);
-  const fra::CompareResult r = fra::compare(model.tf, pts, a.tol);
+  const model::TransferFunction tf = model::read_model(a.model).tf;
+  // Every field of the file, the estimator's `valid` verdict included, so that this judges
+  // exactly the points the commissioning session judged on the same sweep.csv.
+  const model::Frf pts = model::read_frf(a.frf);
+  const fra::CompareResult r = fra::compare(tf, pts, a.tol);
   const nlohmann::json doc = result_json(a, r);
   report::write_json_file(a.out / "report.json", doc);
-  write_html(a, model.tf, pts, r);
+  write_html(a, tf, pts, r);
   if (a.json) {
     fmt::print("{}\n", doc.dump(2));
   } else {
@@ -122,7 +110,9 @@ void add_compare_command(CLI::App& app) {
   auto a = std::make_shared<CompareArgs>();
   CLI::App* cmd = app.add_subcommand("compare", "Compare a model with a measured FRF");
   cmd->add_option("--model", a->model, "Model JSON")->required();
-  cmd->add_option("--frf", a->frf, "FRF CSV (freq_hz,mag,phase_deg,coherence)")->required();
+  cmd->add_option("--frf", a->frf,
+                  "FRF CSV (freq_hz,mag,phase_deg,coherence[,mag_lo,mag_hi][,valid])")
+      ->required();
   cmd->add_option("--out", a->out, "Output folder (must be new or empty, see --force)")->required();
   cmd->add_flag("--force", a->force,
                 "Clear a non-empty --out folder first (an earlier run's files)");

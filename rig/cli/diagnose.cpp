@@ -25,9 +25,9 @@
 #include "rig/diagnose/diagnose.hpp"
 #include "rig/diagnose/report_out.hpp"
 #include "rig/io/input_error.hpp"
-#include "rig/io/model_file.hpp"
 #include "rig/io/out_dir.hpp"
 #include "rig/io/recording.hpp"
+#include "rig/model/model_file.hpp"
 #include "rig/report/json_out.hpp"
 #include "rig/session/emulator.hpp"
 #include "rig/signal/ac_coupling.hpp"
@@ -80,7 +80,7 @@ std::string unit_word(const std::string& u) {
   return w;
 }
 
-void check_units(const io::Recording& rec, const io::ModelFile& m, const std::string& model_file,
+void check_units(const io::Recording& rec, const model::ModelFile& m, const std::string& model_file,
                  const std::string& in, const std::string& out) {
   if (!m.units.is_object()) return;
   const std::pair<const char*, const std::string*> sides[] = {{"input", &in}, {"output", &out}};
@@ -118,7 +118,7 @@ std::optional<double> output_coupling(const io::Recording& rec, const std::strin
 // a sample (zero-order hold: half a sample of dead time) and may carry y sampled after the
 // row's u was written (sidecar y_sampled_after_s: one sample in lockstep). Identified
 // models have both in their delay already and are used as they are.
-bool physical_model(const io::ModelFile& m, bool plant_toml) {
+bool physical_model(const model::ModelFile& m, bool plant_toml) {
   const auto& x = m.extra;
   return plant_toml ||
          (x.contains("source") && x["source"].is_object() && x["source"].contains("plant")) ||
@@ -145,7 +145,7 @@ int run_diagnose(const DiagnoseArgs& a) {
     tmp.emplace();
     plant = load_plant_model(a.model, session::default_plantsim_path(), *tmp);
   }
-  io::ModelFile model = plant ? plant->linear : io::read_model(a.model);
+  model::ModelFile model = plant ? plant->linear : model::read_model(a.model);
   const double alignment_s = physical_model(model, plant_toml) ? row_alignment_s(rec) : 0.0;
   model.tf.delay_s += alignment_s;
   if (model.tf.delay_s < 0.0)
@@ -191,7 +191,7 @@ int run_diagnose(const DiagnoseArgs& a) {
   }
   report::write_json_file(a.out / "report.json", doc);
   diagnose::write_report_html(r, ctx, a.out / "report.html");
-  io::write_model(a.out / "augmented_model.json", diagnose::augmented_model(r, model));
+  model::write_model(a.out / "augmented_model.json", diagnose::augmented_model(r, model));
   if (a.json) {
     fmt::print("{}\n", doc.dump(2));
   } else {

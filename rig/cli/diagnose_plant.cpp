@@ -185,7 +185,7 @@ void map_governor_effect(const diagnose::AppliedEffect& e, const PlantModel& pla
 }
 
 void map_effect(const diagnose::AppliedEffect& e, const diagnose::HypothesisFit& h,
-                const PlantModel& plant, const ident::TransferFunction& baseline,
+                const PlantModel& plant, const model::TransferFunction& baseline,
                 const Eigen::VectorXd& u, Mapper& m) {
   const std::string name = diagnose::to_string(e.effect);
   const auto& p = e.params;
@@ -259,7 +259,7 @@ double PlantModel::param(const std::string& key) const {
 }
 
 PlantMapping plant_changes(const diagnose::HypothesisFit& hypothesis, const PlantModel& plant,
-                           const ident::TransferFunction& baseline, const Eigen::VectorXd& u) {
+                           const model::TransferFunction& baseline, const Eigen::VectorXd& u) {
   PlantMapping out;
   Mapper m(plant, &out);
   for (const auto& e : hypothesis.effects) map_effect(e, hypothesis, plant, baseline, u, m);

@@ -15,8 +15,8 @@
 #include <vector>
 
 #include "rig/diagnose/diagnose.hpp"
-#include "rig/ident/transfer_function.hpp"
-#include "rig/io/model_file.hpp"
+#include "rig/model/model_file.hpp"
+#include "rig/model/transfer_function.hpp"
 
 namespace rig::cli {
 
@@ -44,7 +44,7 @@ class TempDir {
 struct PlantModel {
   std::filesystem::path toml;                               // the plant as given
   std::filesystem::path plantsim;                           // the executable used
-  io::ModelFile linear;                                     // plantsim --linearise (bias % -> kW)
+  model::ModelFile linear;                                  // plantsim --linearise (bias % -> kW)
   std::map<std::string, double> params;                     // resolved "block.name" -> value
   std::map<std::string, std::pair<double, double>> ranges;  // valid range per key
   double param(const std::string& key) const;               // InputError naming the key when absent
@@ -71,7 +71,7 @@ struct PlantMapping {
 // diagnose_plant.cpp). `baseline` is the model the effects were fitted against; `u` the
 // recorded input (its mean is the operating bias the input limits are relative to).
 PlantMapping plant_changes(const diagnose::HypothesisFit& hypothesis, const PlantModel& plant,
-                           const ident::TransferFunction& baseline, const Eigen::VectorXd& u);
+                           const model::TransferFunction& baseline, const Eigen::VectorXd& u);
 
 // The input TOML with the changes applied (toml++; the original's comments are not kept)
 // and a comment header naming each change and why; `summary` lines go into the header.
@@ -89,7 +89,7 @@ struct PlantOutputInput {
   const PlantModel& plant;
   const TempDir& tmp;
   const diagnose::DiagnoseResult& result;
-  const ident::TransferFunction& baseline;  // as diagnosed
+  const model::TransferFunction& baseline;  // as diagnosed
   const Eigen::VectorXd& u;                 // recorded input and output
   const Eigen::VectorXd& y;
   double dt_s = 0.01;

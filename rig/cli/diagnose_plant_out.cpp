@@ -7,7 +7,7 @@
 #include <fstream>
 
 #include "rig/cli/diagnose_plant.hpp"
-#include "rig/io/model_file.hpp"
+#include "rig/model/model_file.hpp"
 #include "rig/signal/ac_coupling.hpp"
 
 namespace rig::cli {
@@ -99,7 +99,7 @@ json write_plant_outputs(const PlantOutputInput& in, std::vector<std::string>* s
   json out;
   out["plant_model"] = {{"file", in.plant.toml.string()},
                         {"plantsim", in.plant.plantsim.string()},
-                        {"linearised", io::model_to_json(in.plant.linear)},
+                        {"linearised", model::model_to_json(in.plant.linear)},
                         {"alignment_s", in.baseline.delay_s - in.plant.linear.tf.delay_s},
                         {"augmented_plant", "augmented_plant.toml"},
                         {"changes", changes_json(mapping)},

@@ -138,7 +138,7 @@ PlantModel load_plant_model(const std::filesystem::path& toml,
   run_plantsim(toml, {plantsim.string(), "--config", toml.string(), "--linearise", tf.string()});
   read_params(run_plantsim(toml, {plantsim.string(), "--config", toml.string(), "--list-params"}),
               toml, &m);
-  m.linear = io::read_model(tf);
+  m.linear = model::read_model(tf);
   return m;
 }
 

@@ -41,9 +41,9 @@ constexpr Eigen::Index kMinSamples = 128;
   throw io::InputError("rig identify", 0, "", option + ": " + expected);
 }
 
-std::optional<ident::ModelOrder> parse_order(const std::string& text) {
+std::optional<model::ModelOrder> parse_order(const std::string& text) {
   if (text == "auto") return std::nullopt;
-  ident::ModelOrder order{0, 0};
+  model::ModelOrder order{0, 0};
   const auto slash = text.find('/');
   const std::string n = text.substr(0, slash);
   const std::string m = slash == std::string::npos ? "0" : text.substr(slash + 1);
@@ -161,11 +161,11 @@ std::vector<ident::CoupledPair> coupled_pairs(const IdentifyArgs& a, const io::R
 }
 
 ident::QualityOptions quality_options(const io::Recording& rec, const signal::CorrelatorOptions& c,
-                                      const std::optional<ident::ModelOrder>& order,
+                                      const std::optional<model::ModelOrder>& order,
                                       bool delay_auto) {
   ident::QualityOptions q;
   q.correlator = c;
-  q.order = order.value_or(ident::ModelOrder{2, 0});
+  q.order = order.value_or(model::ModelOrder{2, 0});
   q.delay_estimated = delay_auto;
   q.coupling_rc_s = rec.sidecar.coupling_rc_s;
   q.jitter_max_s = rec.sampling.has_time ? rec.sampling.jitter_max_s : 0.0;
@@ -228,7 +228,7 @@ int run_identify(const IdentifyArgs& a) {
   io_opt.correlator = ctx.correlator;
   io_opt.estimation_fraction = a.estimation_fraction;
   const ident::IdentifyResult result = ident::identify(u, y, rec.dt_s, io_opt);
-  io::write_model(dir / "model.json", identify_model_file(ctx, result));
+  model::write_model(dir / "model.json", identify_model_file(ctx, result));
   const nlohmann::json rep = identify_report_json(ctx, quality, &result);
   report::write_json_file(dir / "report.json", rep);
   write_identify_html(dir / "report.html", ctx, quality, &result, result.ruu, result.ryu);

@@ -3,15 +3,14 @@
 #pragma once
 
 #include <filesystem>
-#include <string>
-
 #include <nlohmann/json.hpp>
+#include <string>
 
 #include "rig/cli/identify_rows.hpp"
 #include "rig/ident/identify.hpp"
 #include "rig/ident/quality.hpp"
-#include "rig/io/model_file.hpp"
 #include "rig/io/recording.hpp"
+#include "rig/model/model_file.hpp"
 
 namespace rig::cli {
 
@@ -33,7 +32,8 @@ nlohmann::json identify_report_json(const IdentifyContext& ctx,
                                     const ident::QualityReport& quality,
                                     const ident::IdentifyResult* result);
 
-io::ModelFile identify_model_file(const IdentifyContext& ctx, const ident::IdentifyResult& result);
+model::ModelFile identify_model_file(const IdentifyContext& ctx,
+                                     const ident::IdentifyResult& result);
 
 // ruu/ryu: the correlations to plot (the result's own when it exists).
 void write_identify_html(const std::filesystem::path& path, const IdentifyContext& ctx,

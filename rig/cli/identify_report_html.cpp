@@ -52,7 +52,7 @@ std::pair<std::vector<double>, std::vector<double>> magnitude_band(const ident::
   const int draws = 400;
   std::vector<std::vector<double>> mags(f.size());
   for (int d = 0; d < draws; ++d) {
-    ident::TransferFunction tf = r.model;
+    model::TransferFunction tf = r.model;
     for (const auto& p : r.parameters) {
       if (!std::isfinite(p.std_error) || p.name.size() < 2) continue;
       const int power = std::atoi(p.name.c_str() + 1);

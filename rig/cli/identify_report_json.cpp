@@ -120,8 +120,8 @@ json identify_report_json(const IdentifyContext& ctx, const ident::QualityReport
   return j;
 }
 
-io::ModelFile identify_model_file(const IdentifyContext& ctx, const ident::IdentifyResult& r) {
-  io::ModelFile m;
+model::ModelFile identify_model_file(const IdentifyContext& ctx, const ident::IdentifyResult& r) {
+  model::ModelFile m;
   m.tf = r.model;
   m.fit_percent = r.validation_fit_pct;
   m.input = ctx.input;

@@ -22,7 +22,7 @@ Eigen::VectorXd vec(std::initializer_list<double> v) {
 
 // Replaces the least damped complex pole pair's damping ratio; wn (and so the static gain,
 // since the pair contributes wn^2 to a_0) is kept.
-void set_mode_damping(ident::TransferFunction& tf, double zeta) {
+void set_mode_damping(model::TransferFunction& tf, double zeta) {
   const Eigen::VectorXcd p = tf.poles();
   Eigen::Index best = -1;
   double best_zeta = 2.0;
@@ -50,7 +50,7 @@ void set_mode_damping(ident::TransferFunction& tf, double zeta) {
   tf.den = tf.den(0) * poly_from_roots(roots.head(k));
 }
 
-void apply_linear(ident::TransferFunction& tf, const AppliedEffect& e) {
+void apply_linear(model::TransferFunction& tf, const AppliedEffect& e) {
   const auto& p = e.params;
   switch (e.effect) {
     case Effect::kDeadTime:
@@ -120,9 +120,9 @@ OutputFeedback feedback_of(const Problem& pr, std::span<const AppliedEffect> eff
 
 }  // namespace
 
-ident::TransferFunction augmented_tf(const ident::TransferFunction& tf,
+model::TransferFunction augmented_tf(const model::TransferFunction& tf,
                                      std::span<const AppliedEffect> effects) {
-  ident::TransferFunction out = tf;
+  model::TransferFunction out = tf;
   for (const auto& e : effects) apply_linear(out, e);
   return out;
 }
@@ -137,7 +137,7 @@ double weighted_fit_pct(const Eigen::VectorXd& y, const Eigen::VectorXd& yhat,
   return 100.0 * (1.0 - std::sqrt(num / den));
 }
 
-std::optional<std::pair<double, double>> dominant_mode(const ident::TransferFunction& tf) {
+std::optional<std::pair<double, double>> dominant_mode(const model::TransferFunction& tf) {
   const Eigen::VectorXcd p = tf.poles();
   std::optional<std::pair<double, double>> best;
   for (Eigen::Index i = 0; i < p.size(); ++i) {
@@ -150,7 +150,7 @@ std::optional<std::pair<double, double>> dominant_mode(const ident::TransferFunc
 
 void finish_problem(Problem& pr) {
   const Eigen::Index n = pr.u.size();
-  pr.baseline_z = ident::simulate(pr.tf, pr.u, pr.dt_s);
+  pr.baseline_z = model::simulate(pr.tf, pr.u, pr.dt_s);
   auto std_of = [](const Eigen::VectorXd& x) {
     return std::sqrt((x.array() - x.mean()).square().mean());
   };
@@ -195,7 +195,7 @@ ModelOutput model_output(const Problem& pr, std::span<const AppliedEffect> effec
     z = pr.baseline_z;
   } else {
     z = feedback ? simulate_with_feedback(out.tf, v, pr.dt_s, feedback_of(pr, effects))
-                 : ident::simulate(out.tf, v, pr.dt_s);
+                 : model::simulate(out.tf, v, pr.dt_s);
     const Eigen::Index n = z.size();
     if (pr.active_from > 0) z.head(pr.active_from) = pr.baseline_z.head(pr.active_from);
     if (pr.active_to < n) z.tail(n - pr.active_to) = pr.baseline_z.tail(n - pr.active_to);

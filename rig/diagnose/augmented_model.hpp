@@ -10,12 +10,12 @@
 #include <vector>
 
 #include "rig/diagnose/effects.hpp"
-#include "rig/ident/transfer_function.hpp"
+#include "rig/model/transfer_function.hpp"
 
 namespace rig::diagnose {
 
 struct Problem {
-  ident::TransferFunction tf;  // the baseline model
+  model::TransferFunction tf;  // the baseline model
   double dt_s = 0.01;
   std::optional<double> output_rc_s;  // the recording's declared AC coupling of y only
   Eigen::VectorXd u, y;               // operating point (mean) removed
@@ -35,7 +35,7 @@ struct Problem {
 
 struct ModelOutput {
   Eigen::VectorXd yhat;
-  ident::TransferFunction tf;                           // the linear part as augmented
+  model::TransferFunction tf;                           // the linear part as augmented
   std::vector<std::pair<std::string, double>> derived;  // e.g. the disturbance amplitude
 };
 
@@ -49,7 +49,7 @@ ModelOutput model_output(const Problem& problem, std::span<const AppliedEffect> 
 
 // The linear part of the augmented model (dead time, lags, resonance, coupling, damping,
 // gain); effects of other kinds leave it unchanged.
-ident::TransferFunction augmented_tf(const ident::TransferFunction& tf,
+model::TransferFunction augmented_tf(const model::TransferFunction& tf,
                                      std::span<const AppliedEffect> effects);
 
 // Weighted NRMSE fit (DESIGN.md 5) over the samples with weight > 0.
@@ -57,6 +57,6 @@ double weighted_fit_pct(const Eigen::VectorXd& y, const Eigen::VectorXd& yhat,
                         const Eigen::ArrayXd& weight);
 
 // The least damped complex pole pair (freq_hz, zeta) of tf's denominator, if any.
-std::optional<std::pair<double, double>> dominant_mode(const ident::TransferFunction& tf);
+std::optional<std::pair<double, double>> dominant_mode(const model::TransferFunction& tf);
 
 }  // namespace rig::diagnose

@@ -93,7 +93,7 @@ Eigen::VectorXd poly_from_roots(const Eigen::VectorXcd& roots) {
 
 namespace {
 
-// Delayed input with the same linear interpolation as ident::simulate (delay d + f samples).
+// Delayed input with the same linear interpolation as model::simulate (delay d + f samples).
 Eigen::VectorXd delayed(const Eigen::VectorXd& u, double delay_s, double dt_s) {
   const double ds = delay_s / dt_s;
   const Eigen::Index d = static_cast<Eigen::Index>(std::floor(ds + 1e-12));
@@ -107,11 +107,11 @@ Eigen::VectorXd delayed(const Eigen::VectorXd& u, double delay_s, double dt_s) {
 
 }  // namespace
 
-Eigen::VectorXd simulate_with_feedback(const ident::TransferFunction& tf_in,
+Eigen::VectorXd simulate_with_feedback(const model::TransferFunction& tf_in,
                                        const Eigen::VectorXd& u, double dt_s,
                                        const OutputFeedback& feedback) {
   if (!tf_in.is_proper()) throw std::invalid_argument("simulate_with_feedback: improper tf");
-  const ident::TransferFunction tf = ident::monic(tf_in);
+  const model::TransferFunction tf = model::monic(tf_in);
   const Eigen::Index n = tf.den.size() - 1, N = u.size();
   Eigen::VectorXd b = Eigen::VectorXd::Zero(n + 1);
   b.tail(tf.num.size()) = tf.num;

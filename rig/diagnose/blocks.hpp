@@ -6,7 +6,7 @@
 #include <Eigen/Core>
 #include <functional>
 
-#include "rig/ident/transfer_function.hpp"
+#include "rig/model/transfer_function.hpp"
 
 namespace rig::diagnose {
 
@@ -43,7 +43,7 @@ Eigen::VectorXd poly_from_roots(const Eigen::VectorXcd& roots);
 // (ud_k + ud_{k+1}) / 2, which has no half-sample lag, so f = 0 reproduces simulate() to
 // second order in dt.
 using OutputFeedback = std::function<double(double z, double dz)>;
-Eigen::VectorXd simulate_with_feedback(const ident::TransferFunction& tf, const Eigen::VectorXd& u,
+Eigen::VectorXd simulate_with_feedback(const model::TransferFunction& tf, const Eigen::VectorXd& u,
                                        double dt_s, const OutputFeedback& feedback);
 
 // Zero-phase exponential smoother (forward then backward first-order low-pass, time

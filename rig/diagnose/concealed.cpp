@@ -34,7 +34,7 @@ Eigen::VectorXd decimate(const Eigen::VectorXd& f) {
 
 // The effect's true parameters: sized so that each is visible to an engineer but small
 // against the noise.
-std::vector<double> true_params(Effect e, const DataScales& s, const ident::TransferFunction& tf) {
+std::vector<double> true_params(Effect e, const DataScales& s, const model::TransferFunction& tf) {
   const double su = s.u_std;
   switch (e) {
     case Effect::kDeadTime:
@@ -101,9 +101,9 @@ const char* to_string(Concealment c) {
   return "?";
 }
 
-ident::TransferFunction nominal_genset_model() {
+model::TransferFunction nominal_genset_model() {
   const double wn = 2.0 * std::numbers::pi * 2.0, zeta = 0.1, k = 46.0, tc = 0.03;
-  ident::TransferFunction tf;
+  model::TransferFunction tf;
   tf.num = Eigen::VectorXd::Constant(1, k * wn * wn);
   Eigen::VectorXd mode(3), lag(2);
   mode << 1.0, 2.0 * zeta * wn, wn * wn;
@@ -116,7 +116,7 @@ ident::TransferFunction nominal_genset_model() {
 namespace {
 
 // The true plant's clean output on the fine grid, decimated to the recording's.
-Eigen::VectorXd true_output(const ConcealedSpec& spec, const ident::TransferFunction& tf,
+Eigen::VectorXd true_output(const ConcealedSpec& spec, const model::TransferFunction& tf,
                             const Eigen::VectorXd& u, const DataScales& s,
                             const std::vector<double>& p) {
   const double dtf = spec.dt_s / kOversample;
@@ -152,9 +152,9 @@ Eigen::VectorXd true_output(const ConcealedSpec& spec, const ident::TransferFunc
   const bool linear_in_model =
       kind_of(e) == EffectKind::kLinear && e != Effect::kSensorLag && e != Effect::kAcCoupling;
   const AppliedEffect applied{e, p};
-  const ident::TransferFunction t =
+  const model::TransferFunction t =
       linear_in_model ? augmented_tf(tf, std::span<const AppliedEffect>(&applied, 1)) : tf;
-  return decimate(ident::simulate(t, uf, dtf));
+  return decimate(model::simulate(t, uf, dtf));
 }
 
 Eigen::VectorXd white(Eigen::Index n, double std, std::uint64_t seed) {
@@ -168,7 +168,7 @@ Eigen::VectorXd white(Eigen::Index n, double std, std::uint64_t seed) {
 
 ConcealedRecording make_concealed(const ConcealedSpec& spec) {
   ConcealedRecording rec;
-  const ident::TransferFunction tf = nominal_genset_model();
+  const model::TransferFunction tf = nominal_genset_model();
   const auto n = static_cast<Eigen::Index>(std::llround(spec.duration_s / spec.dt_s));
   signal::GaussianOptions go;
   go.n = n, go.dt_s = spec.dt_s, go.bandwidth_hz = 4.0, go.sigma = 0.8, go.clip_sigma = 3.0;
@@ -196,9 +196,9 @@ ConcealedRecording make_concealed(const ConcealedSpec& spec) {
         Eigen::ArrayXd::LinSpaced(n, 0.0, static_cast<double>(n - 1)) * spec.dt_s;
     if (e == Effect::kSensorLag) {
       // The transducer lag filters the plant's own fluctuations as well as the signal.
-      ident::TransferFunction lag{Eigen::VectorXd::Ones(1), Eigen::Vector2d(rec.truth[0], 1.0),
+      model::TransferFunction lag{Eigen::VectorXd::Ones(1), Eigen::Vector2d(rec.truth[0], 1.0),
                                   0.0};
-      z = ident::simulate(lag, z + white(n, sn, spec.seed * 7919 + 2), spec.dt_s);
+      z = model::simulate(lag, z + white(n, sn, spec.seed * 7919 + 2), spec.dt_s);
       noise *= 0.2;
     }
     if (e == Effect::kAcCoupling) z = signal::ac_couple(z, spec.dt_s, rec.truth[0]);

@@ -37,7 +37,7 @@ struct ConcealedRecording {
 
 // The nominal model: a 46 kW/% set with its electromechanical mode at 2 Hz, damping 0.1,
 // a 60 ms dead time and a 30 ms combustion lag (the Stornoway SOPDT of DESIGN.md 7).
-ident::TransferFunction nominal_genset_model();
+model::TransferFunction nominal_genset_model();
 
 // The effect's true parameters used by make_concealed (in parameter_specs() units), for
 // the input and model scales of the spec.

@@ -23,7 +23,7 @@
 namespace rig::diagnose {
 
 struct DiagnoseInput {
-  ident::TransferFunction model;
+  model::TransferFunction model;
   Eigen::VectorXd u, y;  // recorded input and output (any offset)
   double dt_s = 0.01;
   std::optional<double> output_rc_s;  // the output went through this AC coupling

@@ -27,7 +27,7 @@ struct HypothesisFit {
   std::vector<std::pair<std::string, double>> derived;
   int evaluations = 0;
   Eigen::VectorXd yhat;  // the augmented model's output over the whole record
-  ident::TransferFunction tf;
+  model::TransferFunction tf;
   Eigen::Index active_from = 0, active_to = -1;  // span the effect acts on (-1: to the end)
 
   std::string name() const;  // "dead_time" or "dead_time+drift"

@@ -149,7 +149,7 @@ Eigen::VectorXd detrend(const Problem& pr, const Eigen::VectorXd& x) {
 
 // The baseline's response to u restricted by a mask (u outside the mask set to zero).
 Eigen::VectorXd masked_response(const Problem& pr, const Eigen::VectorXd& u) {
-  Eigen::VectorXd z = ident::simulate(pr.tf, u, pr.dt_s);
+  Eigen::VectorXd z = model::simulate(pr.tf, u, pr.dt_s);
   if (pr.output_rc_s) z = signal::ac_couple(z, pr.dt_s, *pr.output_rc_s);
   return detrend(pr, z);
 }

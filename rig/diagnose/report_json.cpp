@@ -122,8 +122,8 @@ nlohmann::json report_json(const DiagnoseResult& r, const ReportContext& c) {
           {"augmented_model", "augmented_model.json"}};
 }
 
-io::ModelFile augmented_model(const DiagnoseResult& r, const io::ModelFile& baseline) {
-  io::ModelFile m = baseline;
+model::ModelFile augmented_model(const DiagnoseResult& r, const model::ModelFile& baseline) {
+  model::ModelFile m = baseline;
   m.cov.reset();
   json aug = json::array();
   if (const HypothesisFit* h = r.chosen()) {

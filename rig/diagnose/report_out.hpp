@@ -8,7 +8,7 @@
 #include <string>
 
 #include "rig/diagnose/diagnose.hpp"
-#include "rig/io/model_file.hpp"
+#include "rig/model/model_file.hpp"
 
 namespace rig::diagnose {
 
@@ -23,7 +23,7 @@ nlohmann::json report_json(const DiagnoseResult& result, const ReportContext& co
 // The chosen hypothesis applied to the baseline: the linear part as the TF, every effect in
 // "augmentation" (effect, params, where it acts), the baseline in "baseline". With no chosen
 // hypothesis the baseline is returned with "augmentation": [].
-io::ModelFile augmented_model(const DiagnoseResult& result, const io::ModelFile& baseline);
+model::ModelFile augmented_model(const DiagnoseResult& result, const model::ModelFile& baseline);
 
 void write_report_html(const DiagnoseResult& result, const ReportContext& context,
                        const std::filesystem::path& file);

@@ -22,14 +22,15 @@ const char* to_string(Verdict verdict) {
 
 namespace {
 
-CompareRow compare_point(const ResponseFn& model, const FrfPoint& m, const CompareTolerances& t) {
+CompareRow compare_point(const ResponseFn& model, const model::FrfPoint& m,
+                         const CompareTolerances& t) {
   CompareRow row;
   row.freq_hz = m.freq_hz;
   const std::complex<double> h = model(m.freq_hz);
   row.model_mag = std::abs(h);
   row.model_phase_deg = std::arg(h) * 180.0 / std::numbers::pi;
   row.mag_error_db = 20.0 * std::log10(m.mag / row.model_mag);
-  row.phase_error_deg = wrap_deg(m.phase_deg - row.model_phase_deg);
+  row.phase_error_deg = model::wrap_deg(m.phase_deg - row.model_phase_deg);
   row.checked =
       m.freq_hz >= t.f_lo_hz && m.freq_hz <= t.f_hi_hz && m.valid && m.coherence >= t.min_coherence;
   // A NaN error (zero or non-finite magnitude) fails: the comparisons below are false.
@@ -40,14 +41,14 @@ CompareRow compare_point(const ResponseFn& model, const FrfPoint& m, const Compa
 
 }  // namespace
 
-CompareResult compare(const ResponseFn& model, const std::vector<FrfPoint>& measured,
+CompareResult compare(const ResponseFn& model, const std::vector<model::FrfPoint>& measured,
                       const CompareTolerances& t) {
   if (!model) throw std::invalid_argument("compare: a model response is required");
   if (!(t.mag_db > 0.0) || !(t.phase_deg > 0.0)) {
     throw std::invalid_argument("compare: tolerances mag_db and phase_deg must be > 0");
   }
   CompareResult r;
-  for (const FrfPoint& m : measured) {
+  for (const model::FrfPoint& m : measured) {
     CompareRow row = compare_point(model, m, t);
     if (row.checked) {
       ++r.checked;

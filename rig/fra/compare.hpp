@@ -50,12 +50,12 @@ struct CompareResult {
 };
 
 // Throws std::invalid_argument for an empty model or non-positive tolerances.
-CompareResult compare(const ResponseFn& model, const std::vector<FrfPoint>& measured,
+CompareResult compare(const ResponseFn& model, const std::vector<model::FrfPoint>& measured,
                       const CompareTolerances& tolerances = {});
 
-// Any model with `response(freq_hz)`, e.g. rig::ident::TransferFunction.
+// Any model with `response(freq_hz)`, e.g. rig::model::TransferFunction.
 template <HasResponse Model>
-CompareResult compare(const Model& model, const std::vector<FrfPoint>& measured,
+CompareResult compare(const Model& model, const std::vector<model::FrfPoint>& measured,
                       const CompareTolerances& tolerances = {}) {
   return compare(as_response_fn(model), measured, tolerances);
 }

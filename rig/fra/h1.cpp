@@ -97,18 +97,18 @@ CrossSpectra welch_cross_spectra(const Eigen::VectorXd& u, const Eigen::VectorXd
   return s;
 }
 
-std::vector<FrfPoint> h1_estimate(const Eigen::VectorXd& u, const Eigen::VectorXd& y, double dt_s,
-                                  const WelchOptions& o) {
+std::vector<model::FrfPoint> h1_estimate(const Eigen::VectorXd& u, const Eigen::VectorXd& y,
+                                         double dt_s, const WelchOptions& o) {
   const CrossSpectra s = welch_cross_spectra(u, y, dt_s, o);
-  std::vector<FrfPoint> out;
+  std::vector<model::FrfPoint> out;
   for (Eigen::Index k = 1; k < s.freq_hz.size(); ++k) {
     const double f = s.freq_hz(k);
     if (f < o.f_min_hz || f > o.f_max_hz || !(s.guu(k) > 0.0)) continue;
     const std::complex<double> h = s.gyu(k) / s.guu(k);
-    FrfPoint p;
+    model::FrfPoint p;
     p.freq_hz = f;
     p.mag = std::abs(h);
-    p.phase_deg = wrap_deg(std::arg(h) * 180.0 / std::numbers::pi);
+    p.phase_deg = model::wrap_deg(std::arg(h) * 180.0 / std::numbers::pi);
     p.coherence = s.gyy(k) > 0.0 ? std::norm(s.gyu(k)) / (s.guu(k) * s.gyy(k)) : 0.0;
     const double gamma2 = std::max(p.coherence, 1e-12);
     const double eps = std::sqrt((1.0 - gamma2) / (2.0 * gamma2 * s.segments));

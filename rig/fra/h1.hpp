@@ -39,7 +39,7 @@ CrossSpectra welch_cross_spectra(const Eigen::VectorXd& u, const Eigen::VectorXd
                                  const WelchOptions& options = {});
 
 // H1 and coherence per bin (bins where G_uu is zero are skipped).
-std::vector<FrfPoint> h1_estimate(const Eigen::VectorXd& u, const Eigen::VectorXd& y, double dt_s,
-                                  const WelchOptions& options = {});
+std::vector<model::FrfPoint> h1_estimate(const Eigen::VectorXd& u, const Eigen::VectorXd& y,
+                                         double dt_s, const WelchOptions& options = {});
 
 }  // namespace rig::fra

@@ -6,8 +6,8 @@
 
 namespace rig::fra {
 
-FrfPoint SteppedSineResult::frf_point() const {
-  FrfPoint p;
+model::FrfPoint SteppedSineResult::frf_point() const {
+  model::FrfPoint p;
   p.freq_hz = point.freq_hz;
   p.mag = mag;
   p.phase_deg = phase_deg;
@@ -74,7 +74,7 @@ SteppedSineResult SteppedSineAnalyser::analyse() const {
   if (!finite) return r;  // good stays false; a NaN means the supervisor tripped anyway
   r.lock_in = lock_in(u, y, p.freq_hz, plan_.dt_s, t0_s, options_.max_harmonic);
   r.mag = std::abs(r.lock_in.ratio);
-  r.phase_deg = wrap_deg(std::arg(r.lock_in.ratio) * 180.0 / std::numbers::pi);
+  r.phase_deg = model::wrap_deg(std::arg(r.lock_in.ratio) * 180.0 / std::numbers::pi);
   r.distortion = r.lock_in.y.distortion();
   r.noise = r.lock_in.y.noise_ratio();
   const double u_noise = r.lock_in.u.noise_ratio() + r.lock_in.u.distortion();
@@ -83,8 +83,8 @@ SteppedSineResult SteppedSineAnalyser::analyse() const {
   return r;
 }
 
-std::vector<FrfPoint> SteppedSineAnalyser::frf() const {
-  std::vector<FrfPoint> out;
+std::vector<model::FrfPoint> SteppedSineAnalyser::frf() const {
+  std::vector<model::FrfPoint> out;
   out.reserve(results_.size());
   for (const auto& r : results_) out.push_back(r.frf_point());
   return out;

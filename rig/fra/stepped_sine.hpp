@@ -44,7 +44,7 @@ struct SteppedSineResult {
   double noise = 0.0;       // response residual variance / fundamental power
   bool good = false;        // all quality thresholds met
 
-  FrfPoint frf_point() const;
+  model::FrfPoint frf_point() const;
 };
 
 class SteppedSineAnalyser {
@@ -64,7 +64,7 @@ class SteppedSineAnalyser {
   std::size_t point_index() const { return index_; }
   const SweepPlan& plan() const { return plan_; }
   const std::vector<SteppedSineResult>& results() const { return results_; }
-  std::vector<FrfPoint> frf() const;
+  std::vector<model::FrfPoint> frf() const;
 
  private:
   SteppedSineResult analyse() const;

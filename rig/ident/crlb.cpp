@@ -9,10 +9,10 @@
 
 namespace rig::ident {
 
-CramerRaoBound cramer_rao_bound(const TransferFunction& true_tf, const Eigen::VectorXd& u,
+CramerRaoBound cramer_rao_bound(const model::TransferFunction& true_tf, const Eigen::VectorXd& u,
                                 double dt_s, double noise_variance, bool delay_known) {
   if (!(noise_variance > 0.0)) throw std::invalid_argument("cramer_rao_bound: noise_variance must be > 0");
-  const TransferFunction tf = monic(true_tf);
+  const model::TransferFunction tf = model::monic(true_tf);
   const int n = tf.order(), m = static_cast<int>(tf.num.size()) - 1;
   const Eigen::MatrixXd jac = output_sensitivities(tf, u, dt_s);
   CramerRaoBound out;
@@ -21,7 +21,7 @@ CramerRaoBound cramer_rao_bound(const TransferFunction& true_tf, const Eigen::Ve
   out.covariance = Eigen::MatrixXd::Zero(jac.cols(), jac.cols());
   out.covariance.topLeftCorner(q, q) = noise_variance * info.inverse();
   out.std_dev = out.covariance.diagonal().cwiseMax(0.0).cwiseSqrt();
-  const ModelOrder order{n, m};
+  const model::ModelOrder order{n, m};
   const std::vector<std::string> names = parameter_names(order);
   out.names.assign(names.begin() + 1, names.end());  // a_n = 1 is not a parameter
   out.names.push_back("delay_s");

@@ -4,12 +4,11 @@
 // covariance is at least F^{-1}; efficiency = CRLB variance / observed variance.
 #pragma once
 
+#include <Eigen/Core>
 #include <vector>
 
-#include <Eigen/Core>
-
 #include "rig/ident/parameters.hpp"
-#include "rig/ident/transfer_function.hpp"
+#include "rig/model/transfer_function.hpp"
 
 namespace rig::ident {
 
@@ -21,7 +20,7 @@ struct CramerRaoBound {
 };
 
 // delay_known: Td is not estimated (its row and column are dropped; reported std 0).
-CramerRaoBound cramer_rao_bound(const TransferFunction& true_tf, const Eigen::VectorXd& u,
+CramerRaoBound cramer_rao_bound(const model::TransferFunction& true_tf, const Eigen::VectorXd& u,
                                 double dt_s, double noise_variance, bool delay_known = false);
 
 }  // namespace rig::ident

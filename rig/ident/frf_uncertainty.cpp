@@ -48,14 +48,14 @@ Eigen::VectorXcd smoothed_spectrum(const signal::Correlation& r, Eigen::Index m,
   return out;
 }
 
-int parameter_count(const TransferFunction& m, bool delay_estimated) {
+int parameter_count(const model::TransferFunction& m, bool delay_estimated) {
   return m.order() + static_cast<int>(m.num.size()) + (delay_estimated ? 1 : 0);
 }
 
 }  // namespace
 
 InputNoiseSpectra input_noise_spectra(const Eigen::VectorXd& u, const Eigen::VectorXd& y,
-                                      double dt_s, const TransferFunction& model,
+                                      double dt_s, const model::TransferFunction& model,
                                       int half_width, int fft_length) {
   if (u.size() != y.size() || u.size() < 4 * half_width || half_width < 8 ||
       fft_length < 2 * half_width || !(dt_s > 0.0)) {
@@ -68,7 +68,7 @@ InputNoiseSpectra input_noise_spectra(const Eigen::VectorXd& u, const Eigen::Vec
   w.zero_index = half_width;
   w.dt_s = dt_s;
   w.kind = signal::CorrelatorKind::kFft;
-  const Eigen::VectorXd v = y - simulate(model, u, dt_s);
+  const Eigen::VectorXd v = y - model::simulate(model, u, dt_s);
   const Eigen::VectorXcd suu = smoothed_spectrum(signal::auto_correlation(u, w), half_width, fft_length);
   const Eigen::VectorXcd svv = smoothed_spectrum(signal::auto_correlation(v, w), half_width, fft_length);
   InputNoiseSpectra s;
@@ -84,9 +84,9 @@ InputNoiseSpectra input_noise_spectra(const Eigen::VectorXd& u, const Eigen::Vec
   return s;
 }
 
-Eigen::VectorXcd response_gradient(const TransferFunction& model, double freq_hz,
+Eigen::VectorXcd response_gradient(const model::TransferFunction& model, double freq_hz,
                                    bool delay_estimated) {
-  const TransferFunction tf = monic(model);
+  const model::TransferFunction tf = model::monic(model);
   const int n = tf.order();
   const int nb = static_cast<int>(tf.num.size());
   const cd s(0.0, kTwoPi * freq_hz);
@@ -102,7 +102,7 @@ Eigen::VectorXcd response_gradient(const TransferFunction& model, double freq_hz
   return psi;
 }
 
-Eigen::MatrixXd asymptotic_covariance(const TransferFunction& model,
+Eigen::MatrixXd asymptotic_covariance(const model::TransferFunction& model,
                                       const InputNoiseSpectra& spectra, double samples,
                                       bool delay_estimated, double weight_power) {
   if (!model.is_proper()) throw std::invalid_argument("asymptotic_covariance: improper model");
@@ -138,7 +138,7 @@ Eigen::MatrixXd asymptotic_covariance(const TransferFunction& model,
   return cov.allFinite() ? cov : inf;
 }
 
-std::vector<FrfUncertainty> frf_uncertainty(const TransferFunction& model,
+std::vector<FrfUncertainty> frf_uncertainty(const model::TransferFunction& model,
                                             const Eigen::MatrixXd& cov,
                                             const std::vector<double>& freqs_hz,
                                             bool delay_estimated) {

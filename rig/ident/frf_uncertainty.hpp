@@ -30,7 +30,7 @@
 
 #include <Eigen/Core>
 
-#include "rig/ident/transfer_function.hpp"
+#include "rig/model/transfer_function.hpp"
 #include "rig/signal/correlation.hpp"
 
 namespace rig::ident {
@@ -49,7 +49,7 @@ struct InputNoiseSpectra {
 // +-half_width samples. Throws std::invalid_argument for unequal lengths, a record shorter
 // than two windows, fft_length < 2 half_width or an improper model.
 InputNoiseSpectra input_noise_spectra(const Eigen::VectorXd& u, const Eigen::VectorXd& y,
-                                      double dt_s, const TransferFunction& model,
+                                      double dt_s, const model::TransferFunction& model,
                                       int half_width = 256, int fft_length = 1024);
 
 // The estimator's criterion weight W = Phi_u^power: 1 for the time-domain output error,
@@ -60,13 +60,13 @@ inline constexpr double kTimeDomainWeightPower = 1.0;
 // Asymptotic covariance of theta (see above) after `samples` samples. Throws
 // std::invalid_argument for an improper model or samples <= 0; a singular H gives a matrix
 // of infinities (the data do not determine the parameters).
-Eigen::MatrixXd asymptotic_covariance(const TransferFunction& model,
+Eigen::MatrixXd asymptotic_covariance(const model::TransferFunction& model,
                                       const InputNoiseSpectra& spectra, double samples,
                                       bool delay_estimated,
                                       double weight_power = kTimeDomainWeightPower);
 
 // d G(j 2 pi f) / d theta for the monic model (theta as above).
-Eigen::VectorXcd response_gradient(const TransferFunction& model, double freq_hz,
+Eigen::VectorXcd response_gradient(const model::TransferFunction& model, double freq_hz,
                                    bool delay_estimated);
 
 struct FrfUncertainty {
@@ -79,7 +79,7 @@ struct FrfUncertainty {
 
 // The model's response with its standard deviations at each frequency; cov is
 // asymptotic_covariance()'s (same delay_estimated).
-std::vector<FrfUncertainty> frf_uncertainty(const TransferFunction& model,
+std::vector<FrfUncertainty> frf_uncertainty(const model::TransferFunction& model,
                                             const Eigen::MatrixXd& cov,
                                             const std::vector<double>& freqs_hz,
                                             bool delay_estimated);

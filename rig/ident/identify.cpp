@@ -14,7 +14,7 @@ namespace {
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
 struct Fit {
-  TransferFunction model;
+  model::TransferFunction model;
   double delay_std_s = kNaN;
   Eigen::MatrixXd covariance;  // theta layout [a_n..a_0, b_m..b_0]
   double condition_number = kNaN;
@@ -28,7 +28,7 @@ signal::CorrelatorOptions correlator_for(const IdentifyOptions& opt, double dt_s
 }
 
 Fit fit_segment(const Eigen::VectorXd& u, const Eigen::VectorXd& y, double dt_s,
-                ModelOrder order, const IdentifyOptions& opt, const MmfmOptions* fixed) {
+                model::ModelOrder order, const IdentifyOptions& opt, const MmfmOptions* fixed) {
   Fit fit;
   if (opt.method == IdentMethod::kSrivc) {
     SrivcOptions so;
@@ -60,19 +60,19 @@ Fit fit_segment(const Eigen::VectorXd& u, const Eigen::VectorXd& y, double dt_s,
 }
 
 std::vector<OrderScore> score_orders(const Eigen::VectorXd& u, const Eigen::VectorXd& y,
-                                     double dt_s, const std::vector<ModelOrder>& candidates,
+                                     double dt_s, const std::vector<model::ModelOrder>& candidates,
                                      const IdentifyOptions& opt) {
   const Eigen::Index n_est = static_cast<Eigen::Index>(opt.estimation_fraction * u.size());
   const Eigen::Index n_val = u.size() - n_est;
   std::vector<OrderScore> table;
-  for (const ModelOrder& order : candidates) {
+  for (const model::ModelOrder& order : candidates) {
     OrderScore s{order, kNaN, kNaN, -std::numeric_limits<double>::infinity(), kNaN};
     try {
       const Fit f = fit_segment(u.head(n_est), y.head(n_est), dt_s, order, opt, nullptr);
       // Simulate over the whole input so the validation part starts in the right state.
       const Eigen::VectorXd y_hat = simulate(f.model, u, dt_s);
-      s.fit_pct = fit_percent(y.head(n_est), y_hat.head(n_est));
-      s.validation_fit_pct = fit_percent(y.tail(n_val), y_hat.tail(n_val));
+      s.fit_pct = model::fit_percent(y.head(n_est), y_hat.head(n_est));
+      s.validation_fit_pct = model::fit_percent(y.tail(n_val), y_hat.tail(n_val));
       s.delay_s = f.model.delay_s;
       const int params = order.n + order.m + 1 + (opt.delay_s ? 0 : 1);
       if (std::isfinite(s.validation_fit_pct) && f.model.is_stable()) {
@@ -91,7 +91,7 @@ std::vector<OrderScore> score_orders(const Eigen::VectorXd& u, const Eigen::Vect
 // Batch means: estimates on consecutive blocks, std / sqrt(blocks) for every parameter,
 // the delay and the derived figures.
 void block_std_errors(const Eigen::VectorXd& u, const Eigen::VectorXd& y, double dt_s,
-                      ModelOrder order, const IdentifyOptions& opt, const MmfmOptions& fixed,
+                      model::ModelOrder order, const IdentifyOptions& opt, const MmfmOptions& fixed,
                       IdentifyResult& res) {
   const int b = opt.blocks;
   const Eigen::Index len = u.size() / b;
@@ -101,7 +101,7 @@ void block_std_errors(const Eigen::VectorXd& u, const Eigen::VectorXd& y, double
     try {
       Fit f = fit_segment(u.segment(i * len, len), y.segment(i * len, len), dt_s, order, opt,
                           &fixed);
-      const TransferFunction t = normalise(f.model, opt.mmfm.normalisation);
+      const model::TransferFunction t = normalise(f.model, opt.mmfm.normalisation);
       thetas.push_back(pack_parameters(t));
       delays.push_back(t.delay_s);
       const DerivedFigures d = derived_figures(t, Eigen::MatrixXd());
@@ -159,8 +159,8 @@ IdentifyResult identify(const Eigen::VectorXd& u_raw, const Eigen::VectorXd& y_r
   const Eigen::VectorXd y = y_raw.array() - y_raw.mean();
   IdentifyResult res;
   res.method = opt.method;
-  const std::vector<ModelOrder> candidates =
-      opt.order ? std::vector<ModelOrder>{*opt.order} : opt.candidates;
+  const std::vector<model::ModelOrder> candidates =
+      opt.order ? std::vector<model::ModelOrder>{*opt.order} : opt.candidates;
   res.order_table = score_orders(u, y, dt_s, candidates, opt);
   const auto best = std::max_element(res.order_table.begin(), res.order_table.end(),
                                      [](const OrderScore& a, const OrderScore& b) {

@@ -7,15 +7,14 @@
 // otherwise the estimator's own analytic value.
 #pragma once
 
+#include <Eigen/Core>
 #include <optional>
 #include <string>
 #include <vector>
 
-#include <Eigen/Core>
-
 #include "rig/ident/mmfm.hpp"
 #include "rig/ident/parameters.hpp"
-#include "rig/ident/transfer_function.hpp"
+#include "rig/model/transfer_function.hpp"
 #include "rig/signal/correlation.hpp"
 #include "rig/signal/correlators.hpp"
 
@@ -25,7 +24,7 @@ enum class IdentMethod { kMmfm, kSrivc };
 const char* to_string(IdentMethod method);
 
 struct OrderScore {
-  ModelOrder order;
+  model::ModelOrder order;
   double fit_pct = 0.0;             // on the estimation part
   double validation_fit_pct = 0.0;  // on the held-out part
   double score = 0.0;               // validation fit - penalty * parameters
@@ -34,12 +33,12 @@ struct OrderScore {
 
 struct IdentifyOptions {
   IdentMethod method = IdentMethod::kMmfm;
-  std::optional<ModelOrder> order;       // nullopt: selected from candidates
+  std::optional<model::ModelOrder> order;  // nullopt: selected from candidates
   std::optional<double> delay_s;         // nullopt: estimated
   signal::CorrelatorOptions correlator;  // dt_s is overwritten with the record's dt
   double estimation_fraction = 0.5;
-  std::vector<ModelOrder> candidates = {{1, 0}, {2, 0}, {2, 1}, {3, 0}, {3, 1},
-                                        {3, 2}, {4, 0}, {4, 1}, {4, 2}};
+  std::vector<model::ModelOrder> candidates = {{1, 0}, {2, 0}, {2, 1}, {3, 0}, {3, 1},
+                                               {3, 2}, {4, 0}, {4, 1}, {4, 2}};
   double penalty_pct_per_parameter = 0.1;
   int blocks = 8;                        // for block-spread standard errors; 0: analytic
   double max_delay_s = -1.0;             // < 0: automatic
@@ -48,13 +47,13 @@ struct IdentifyOptions {
 
 struct IdentifyResult {
   IdentMethod method = IdentMethod::kMmfm;
-  TransferFunction model;
+  model::TransferFunction model;
   std::vector<ParameterEstimate> parameters;
   double delay_s = 0.0;
   double delay_std_s = 0.0;
   DerivedFigures derived;
   std::vector<OrderScore> order_table;
-  ModelOrder order;
+  model::ModelOrder order;
   double validation_fit_pct = 0.0;
   double condition_number = 0.0;         // MMFM equation matrix (NaN for SRIVC)
   std::string std_error_method;          // "block spread (8 blocks)" or "analytic"

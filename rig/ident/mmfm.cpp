@@ -21,7 +21,7 @@ double score_of(const MmfmResult& r) {
 struct Evaluator {
   const signal::Correlation& ruu;
   const signal::Correlation& ryu;
-  ModelOrder order;
+  model::ModelOrder order;
   MmfmSettings settings;
   int evaluations = 0;
 

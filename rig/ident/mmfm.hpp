@@ -18,7 +18,7 @@
 
 #include "rig/ident/modulating.hpp"
 #include "rig/ident/parameters.hpp"
-#include "rig/ident/transfer_function.hpp"
+#include "rig/model/transfer_function.hpp"
 #include "rig/signal/correlation.hpp"
 
 namespace rig::ident {
@@ -45,7 +45,7 @@ struct MmfmSettings {
 };
 
 struct MmfmOptions {
-  ModelOrder order;
+  model::ModelOrder order;
   std::optional<double> delay_s;      // nullopt: estimated (search near the onset lag)
   double max_delay_s = -1.0;          // search range upper end; < 0: automatic
   ModulatingFamily family = ModulatingFamily::kHermite;
@@ -62,7 +62,7 @@ struct MmfmOptions {
 };
 
 struct MmfmResult {
-  TransferFunction model;              // normalised as settings.normalisation
+  model::TransferFunction model;              // normalised as settings.normalisation
   std::vector<ParameterEstimate> parameters;  // with std errors, last row delay_s
   Eigen::MatrixXd covariance;          // of theta (ParameterEstimate order without delay)
   double delay_s = 0.0;
@@ -83,7 +83,7 @@ struct MmfmResult {
 // identify() for a spread-based alternative). Throws std::invalid_argument when the
 // functions do not fit inside the correlation window or the lag axes differ.
 MmfmResult mmfm_solve(const signal::Correlation& ruu, const signal::Correlation& ryu,
-                      ModelOrder order, double delay_s, const MmfmSettings& settings);
+                      model::ModelOrder order, double delay_s, const MmfmSettings& settings);
 
 // Full estimator: automatic time scale (scan around the cross-correlation's dominant time
 // scale), automatic dead time (1-D search scored by the correlation-domain output error,
@@ -99,25 +99,25 @@ MmfmResult refine_correlation_output_error(const signal::Correlation& ruu,
                                            const MmfmResult& start, bool delay_free);
 
 // The model's cross-correlation r_yu_hat = h * r_uu on r_uu's lag axis (lsim of r_uu).
-signal::Correlation model_cross_correlation(const TransferFunction& tf,
+signal::Correlation model_cross_correlation(const model::TransferFunction& tf,
                                             const signal::Correlation& ruu);
 
 // Same, plus the free response that best explains r_yu: r_uu is not zero before the window
 // (a finite record's autocorrelation has a noise floor), so the lsim starting at rest at the
 // first lag misses a transient that, for a lightly damped system, lasts the whole window.
 // Its n initial states are fitted by least squares. Used for every correlation-domain score.
-signal::Correlation model_cross_correlation(const TransferFunction& tf,
+signal::Correlation model_cross_correlation(const model::TransferFunction& tf,
                                             const signal::Correlation& ruu,
                                             const signal::Correlation& ryu);
 
 // Half-width (s) of the support of the functions of `settings` for the given order.
-double support_half_width_s(ModelOrder order, const MmfmSettings& settings);
+double support_half_width_s(model::ModelOrder order, const MmfmSettings& settings);
 
 // Centres spread evenly over the lags where every function fits inside both windows for any
 // delay in [min_delay_s, max_delay_s], kept near the significant part of r_yu (count of
 // them; empty when none fits).
 std::vector<double> admissible_centres(const signal::Correlation& ruu,
-                                       const signal::Correlation& ryu, ModelOrder order,
+                                       const signal::Correlation& ryu, model::ModelOrder order,
                                        double min_delay_s, double max_delay_s,
                                        const MmfmSettings& settings, int count);
 

@@ -45,7 +45,7 @@ std::pair<Eigen::Index, Eigen::Index> support(const signal::Correlation& c, doub
 // Rows for the functions of one band (scale band_s, its centres). Unknowns are scaled with
 // the primary S: a_i S^-i, so the band's columns carry (S / band_s)^i.
 void add_band_rows(const signal::Correlation& ruu, const signal::Correlation& ryu,
-                   ModelOrder order, double delay_s, const MmfmSettings& st, double band_s,
+                   model::ModelOrder order, double delay_s, const MmfmSettings& st, double band_s,
                    const std::vector<double>& centres, Eigen::MatrixXd& m, Eigen::Index& row) {
   const int n = order.n, mo = order.m, deriv = std::max(n, mo);
   MmfmSettings band = st;
@@ -80,7 +80,7 @@ void add_band_rows(const signal::Correlation& ruu, const signal::Correlation& ry
 }
 
 Equations build_equations(const signal::Correlation& ruu, const signal::Correlation& ryu,
-                          ModelOrder order, double delay_s, const MmfmSettings& st) {
+                          model::ModelOrder order, double delay_s, const MmfmSettings& st) {
   Eigen::Index rows = static_cast<Eigen::Index>(st.centres_s.size());
   for (const MmfmBand& b : st.extra_bands) rows += static_cast<Eigen::Index>(b.centres_s.size());
   Equations eq;
@@ -105,14 +105,14 @@ const char* to_string(MmfmSolver solver) {
   return solver == MmfmSolver::kLeastSquares ? "least squares" : "total least squares";
 }
 
-double support_half_width_s(ModelOrder order, const MmfmSettings& settings) {
+double support_half_width_s(model::ModelOrder order, const MmfmSettings& settings) {
   if (settings.family == ModulatingFamily::kPolynomial) return 4.0 * settings.scale_s;
   return hermite_half_width(settings.functions - 1 + std::max(order.n, order.m)) *
          settings.scale_s;
 }
 
 std::vector<double> admissible_centres(const signal::Correlation& ruu,
-                                       const signal::Correlation& ryu, ModelOrder order,
+                                       const signal::Correlation& ryu, model::ModelOrder order,
                                        double min_delay_s, double max_delay_s,
                                        const MmfmSettings& settings, int count) {
   const double hw = support_half_width_s(order, settings);
@@ -139,18 +139,18 @@ std::vector<double> admissible_centres(const signal::Correlation& ruu,
   return centres;
 }
 
-signal::Correlation model_cross_correlation(const TransferFunction& tf,
+signal::Correlation model_cross_correlation(const model::TransferFunction& tf,
                                             const signal::Correlation& ruu) {
   signal::Correlation out = ruu;
   out.r = simulate(tf, ruu.r, ruu.dt_s);
   return out;
 }
 
-signal::Correlation model_cross_correlation(const TransferFunction& tf,
+signal::Correlation model_cross_correlation(const model::TransferFunction& tf,
                                             const signal::Correlation& ruu,
                                             const signal::Correlation& ryu) {
   signal::Correlation out = model_cross_correlation(tf, ruu);
-  const Eigen::MatrixXd basis = free_response_basis(tf, ruu.size(), ruu.dt_s);
+  const Eigen::MatrixXd basis = model::free_response_basis(tf, ruu.size(), ruu.dt_s);
   if (basis.cols() == 0 || !out.r.allFinite()) return out;
   const Eigen::VectorXd x0 = basis.colPivHouseholderQr().solve(ryu.r - out.r);
   out.r += basis * x0;
@@ -201,7 +201,7 @@ Solution solve_equilibrated(const Eigen::MatrixXd& mt, Eigen::Index ref, MmfmSol
 }  // namespace
 
 MmfmResult mmfm_solve(const signal::Correlation& ruu, const signal::Correlation& ryu,
-                      ModelOrder order, double delay_s, const MmfmSettings& st) {
+                      model::ModelOrder order, double delay_s, const MmfmSettings& st) {
   check_axes(ruu, ryu);
   if (order.n < 1 || order.m < 0 || order.m > order.n)
     throw std::invalid_argument("mmfm: order must satisfy n >= 1 and 0 <= m <= n");
@@ -221,7 +221,7 @@ MmfmResult mmfm_solve(const signal::Correlation& ruu, const signal::Correlation&
   for (int j = 0; j <= order.m; ++j) unscale(order.n + 1 + order.m - j) = std::pow(st.scale_s, j);
   unscale = unscale.cwiseQuotient(col_norm);
   Eigen::MatrixXd cov = unscale.asDiagonal() * sol.cov_t * unscale.asDiagonal();
-  const TransferFunction raw =
+  const model::TransferFunction raw =
       unpack_parameters(sol.theta_t.cwiseProduct(unscale), order, delay_s);
   MmfmResult res;
   res.model = normalise(raw, st.normalisation, &cov);
@@ -232,7 +232,7 @@ MmfmResult mmfm_solve(const signal::Correlation& ruu, const signal::Correlation&
   res.equation_residual = sol.residual.norm() / std::max(1e-300, mt.col(ref).norm());
   res.settings = st;
   res.model_ryu = model_cross_correlation(res.model, ruu, ryu);
-  res.correlation_fit_pct = fit_percent(ryu.r, res.model_ryu.r);
+  res.correlation_fit_pct = model::fit_percent(ryu.r, res.model_ryu.r);
   res.derived = derived_figures(res.model, res.covariance);
   res.parameters = parameter_table(res.model, res.covariance, res.delay_std_s);
   return res;

@@ -13,8 +13,8 @@
 namespace rig::ident {
 namespace {
 
-TransferFunction from_theta(const Eigen::VectorXd& th, int n, int m, double delay_s) {
-  TransferFunction tf;
+model::TransferFunction from_theta(const Eigen::VectorXd& th, int n, int m, double delay_s) {
+  model::TransferFunction tf;
   tf.den.resize(n + 1);
   tf.den << 1.0, th.head(n);
   tf.num = th.segment(n, m + 1);
@@ -23,7 +23,7 @@ TransferFunction from_theta(const Eigen::VectorXd& th, int n, int m, double dela
 }
 
 // Residual with the best initial-state transient removed (see model_cross_correlation).
-double sse_of(const TransferFunction& tf, const signal::Correlation& ruu,
+double sse_of(const model::TransferFunction& tf, const signal::Correlation& ruu,
               const signal::Correlation& ryu) {
   if (!tf.is_stable() || tf.delay_s < 0.0) return std::numeric_limits<double>::infinity();
   const double v = (ryu.r - model_cross_correlation(tf, ruu, ryu).r).squaredNorm();
@@ -32,8 +32,9 @@ double sse_of(const TransferFunction& tf, const signal::Correlation& ruu,
 
 // Orthonormal basis Q of the free responses of tf; x - Q Q^T x projects the initial-state
 // transient out (variable projection, the basis' own dependence on theta neglected).
-Eigen::MatrixXd transient_basis(const TransferFunction& tf, Eigen::Index samples, double dt_s) {
-  const Eigen::MatrixXd basis = free_response_basis(tf, samples, dt_s);
+Eigen::MatrixXd transient_basis(const model::TransferFunction& tf, Eigen::Index samples,
+                                double dt_s) {
+  const Eigen::MatrixXd basis = model::free_response_basis(tf, samples, dt_s);
   Eigen::HouseholderQR<Eigen::MatrixXd> qr(basis);
   return qr.householderQ() * Eigen::MatrixXd::Identity(samples, basis.cols());
 }
@@ -47,7 +48,7 @@ Eigen::MatrixXd project_out(const Eigen::MatrixXd& q, const Eigen::MatrixXd& x) 
 MmfmResult refine_correlation_output_error(const signal::Correlation& ruu,
                                            const signal::Correlation& ryu,
                                            const MmfmResult& start, bool delay_free) {
-  const TransferFunction m0 = monic(start.model);
+  const model::TransferFunction m0 = model::monic(start.model);
   const int n = m0.order(), m = static_cast<int>(m0.num.size()) - 1;
   const Eigen::Index p = n + m + 1 + (delay_free ? 1 : 0);
   Eigen::VectorXd th(n + m + 2);
@@ -56,7 +57,7 @@ MmfmResult refine_correlation_output_error(const signal::Correlation& ruu,
   if (!std::isfinite(v)) return start;
   Eigen::MatrixXd jtj;
   for (int it = 0; it < 50; ++it) {
-    const TransferFunction tf = from_theta(th, n, m, th(n + m + 1));
+    const model::TransferFunction tf = from_theta(th, n, m, th(n + m + 1));
     const Eigen::MatrixXd q = transient_basis(tf, ryu.size(), ryu.dt_s);
     const Eigen::VectorXd e = project_out(q, ryu.r - simulate(tf, ruu.r, ruu.dt_s));
     const Eigen::MatrixXd j = project_out(q, output_sensitivities(tf, ruu.r, ruu.dt_s).leftCols(p));
@@ -82,7 +83,7 @@ MmfmResult refine_correlation_output_error(const signal::Correlation& ruu,
     if (!accepted) break;
   }
   MmfmResult res = start;
-  const TransferFunction tf = from_theta(th, n, m, th(n + m + 1));
+  const model::TransferFunction tf = from_theta(th, n, m, th(n + m + 1));
   const Eigen::MatrixXd j = project_out(transient_basis(tf, ryu.size(), ryu.dt_s),
                                         output_sensitivities(tf, ruu.r, ruu.dt_s).leftCols(p));
   const double s2 = v / std::max<double>(1.0, static_cast<double>(ryu.size() - p));
@@ -95,7 +96,7 @@ MmfmResult refine_correlation_output_error(const signal::Correlation& ruu,
   res.delay_s = tf.delay_s;
   if (delay_free) res.delay_std_s = std::sqrt(std::max(0.0, cov_p(p - 1, p - 1)));
   res.model_ryu = model_cross_correlation(res.model, ruu, ryu);
-  res.correlation_fit_pct = fit_percent(ryu.r, res.model_ryu.r);
+  res.correlation_fit_pct = model::fit_percent(ryu.r, res.model_ryu.r);
   res.derived = derived_figures(res.model, res.covariance);
   res.parameters = parameter_table(res.model, res.covariance, res.delay_std_s);
   res.refined = true;

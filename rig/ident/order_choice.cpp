@@ -11,7 +11,7 @@ namespace {
 
 constexpr double kZ95 = 1.959963984540054;
 
-int parameter_count(ModelOrder o) { return o.n + o.m + 1; }
+int parameter_count(model::ModelOrder o) { return o.n + o.m + 1; }
 
 bool inside_band(const OrderCandidate& simple, const OrderCandidate& complex) {
   for (std::size_t i = 0; i < simple.band.size() && i < complex.band.size(); ++i) {
@@ -31,11 +31,11 @@ constexpr double kNestedPoleFactor = 10.0;
 // The simpler model with one more pole (far above its own) or one more numerator
 // coefficient (zero): the richer structure started where the simpler one ended, so that its
 // fit can only improve on it.
-std::optional<TransferFunction> nested_start(const TransferFunction& simpler, ModelOrder order) {
-  const TransferFunction m = monic(simpler);
+std::optional<model::TransferFunction> nested_start(const model::TransferFunction& simpler, model::ModelOrder order) {
+  const model::TransferFunction m = model::monic(simpler);
   const int n = m.order(), nb = static_cast<int>(m.num.size()) - 1;
   if (order.n < n || order.m < nb || order.n - n > 1 || order.m - nb > 1) return std::nullopt;
-  TransferFunction t = m;
+  model::TransferFunction t = m;
   if (order.n == n + 1) {
     const double fastest = m.poles().cwiseAbs().maxCoeff();
     const double p = kNestedPoleFactor * std::max(fastest, 1.0);
@@ -50,17 +50,17 @@ std::optional<TransferFunction> nested_start(const TransferFunction& simpler, Mo
     num.tail(nb + 1) = t.num;
     t.num = num;
   }
-  return monic(t);
+  return model::monic(t);
 }
 
 // Start models for one order: its previous fit, MMFM on the correlations, and the nested
 // extension of every simpler candidate already fitted.
-std::vector<TransferFunction> start_models(const signal::Correlation& ruu,
-                                           const signal::Correlation& ryu, ModelOrder order,
+std::vector<model::TransferFunction> start_models(const signal::Correlation& ruu,
+                                           const signal::Correlation& ryu, model::ModelOrder order,
                                            const OrderChoiceOptions& o,
                                            const std::vector<OrderCandidate>& warm,
                                            const std::vector<OrderCandidate>& simpler) {
-  std::vector<TransferFunction> starts;
+  std::vector<model::TransferFunction> starts;
   for (const auto& w : warm) {
     if (w.ok && w.order == order) starts.push_back(w.model);
   }
@@ -80,10 +80,10 @@ std::vector<TransferFunction> start_models(const signal::Correlation& ruu,
     if (auto t = nested_start(c.model, order)) starts.push_back(*t);
   }
   if (o.prior) {
-    std::optional<TransferFunction> t = monic(*o.prior);
+    std::optional<model::TransferFunction> t = model::monic(*o.prior);
     // Up one pole or one zero at a time until the order is reached.
-    while (t && !(ModelOrder{t->order(), static_cast<int>(t->num.size()) - 1} == order)) {
-      const ModelOrder now{t->order(), static_cast<int>(t->num.size()) - 1};
+    while (t && !(model::ModelOrder{t->order(), static_cast<int>(t->num.size()) - 1} == order)) {
+      const model::ModelOrder now{t->order(), static_cast<int>(t->num.size()) - 1};
       t = nested_start(*t, {std::min(order.n, now.n + 1), std::min(order.m, now.m + 1)});
     }
     if (t) starts.push_back(*t);
@@ -92,7 +92,7 @@ std::vector<TransferFunction> start_models(const signal::Correlation& ruu,
 }
 
 OrderCandidate fit_one(const Eigen::VectorXd& u, const Eigen::VectorXd& y, double dt_s,
-                       const std::vector<TransferFunction>& starts, ModelOrder order,
+                       const std::vector<model::TransferFunction>& starts, model::ModelOrder order,
                        const OrderChoiceOptions& o) {
   OrderCandidate c;
   c.order = order;
@@ -100,7 +100,7 @@ OrderCandidate fit_one(const Eigen::VectorXd& u, const Eigen::VectorXd& y, doubl
     if (starts.empty()) throw std::runtime_error("no start model for this structure");
     const bool delay_free = !o.delay_s.has_value();
     double best_cost = std::numeric_limits<double>::infinity();
-    for (TransferFunction start : starts) {
+    for (model::TransferFunction start : starts) {
       if (o.delay_s) start.delay_s = *o.delay_s;
       const OutputErrorFit fit = refine_output_error(u, y, dt_s, start, delay_free);
       if (fit.cost < best_cost && fit.model.is_stable()) best_cost = fit.cost, c.model = fit.model;
@@ -111,7 +111,7 @@ OrderCandidate fit_one(const Eigen::VectorXd& u, const Eigen::VectorXd& y, doubl
     c.band = frf_uncertainty(c.model, c.covariance, o.compare_freqs_hz, delay_free);
     c.width = worst_band95(c.band);
     c.cost = best_cost;
-    c.fit_pct = fit_percent(y, simulate(c.model, u, dt_s));
+    c.fit_pct = model::fit_percent(y, model::simulate(c.model, u, dt_s));
     c.ok = std::isfinite(c.width.db) && std::isfinite(c.width.deg);
     if (!c.ok) c.error = "the data do not determine this structure";
   } catch (const std::exception& e) {
@@ -163,7 +163,7 @@ OrderChoice choose_order(const Eigen::VectorXd& u, const Eigen::VectorXd& y, dou
     throw std::invalid_argument("choose_order: no candidate orders or no compare frequencies");
   }
   OrderChoice out;
-  for (const ModelOrder& order : options.orders) {
+  for (const model::ModelOrder& order : options.orders) {
     const auto starts = start_models(ruu, ryu, order, options, warm, out.candidates);
     out.candidates.push_back(fit_one(u, y, dt_s, starts, order, options));
   }

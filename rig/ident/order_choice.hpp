@@ -29,16 +29,16 @@
 
 #include "rig/ident/frf_uncertainty.hpp"
 #include "rig/ident/mmfm.hpp"
-#include "rig/ident/transfer_function.hpp"
+#include "rig/model/transfer_function.hpp"
 #include "rig/signal/correlation.hpp"
 
 namespace rig::ident {
 
 struct OrderCandidate {
-  ModelOrder order;
+  model::ModelOrder order;
   bool ok = false;
   std::string error;              // why not, when !ok
-  TransferFunction model;         // monic, with the delay
+  model::TransferFunction model;         // monic, with the delay
   Eigen::MatrixXd covariance;     // asymptotic, of [a_{n-1}..a_0, b_m..b_0 (, Td)]
   std::vector<FrfUncertainty> band;  // at the compare frequencies
   BandWidth95 width;              // widest 95 % half-band (chosen: widened, see above)
@@ -47,12 +47,12 @@ struct OrderCandidate {
 };
 
 struct OrderChoiceOptions {
-  std::vector<ModelOrder> orders = {{2, 0}, {3, 0}, {3, 1}};
+  std::vector<model::ModelOrder> orders = {{2, 0}, {3, 0}, {3, 1}};
   std::optional<double> delay_s;        // nullopt: estimated
   std::vector<double> compare_freqs_hz;  // where the response is judged
   MmfmOptions mmfm;                     // start estimates (order, delay and refine overridden)
   // A model known beforehand (the pilot's): one more start for every order, nested up to it.
-  std::optional<TransferFunction> prior;
+  std::optional<model::TransferFunction> prior;
   int spectrum_half_width = 256;        // lag window of the spectra (samples)
 };
 

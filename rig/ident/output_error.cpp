@@ -16,8 +16,8 @@ constexpr int kMaxIterations = 30;
 constexpr int kMaxDampingTries = 10;
 constexpr double kRelativeStop = 1e-9;  // relative cost decrease that ends the iteration
 
-TransferFunction from_theta(const Eigen::VectorXd& th, int n, int m) {
-  TransferFunction tf;
+model::TransferFunction from_theta(const Eigen::VectorXd& th, int n, int m) {
+  model::TransferFunction tf;
   tf.den.resize(n + 1);
   tf.den << 1.0, th.head(n);
   tf.num = th.segment(n, m + 1);
@@ -25,21 +25,21 @@ TransferFunction from_theta(const Eigen::VectorXd& th, int n, int m) {
   return tf;
 }
 
-double cost_of(const TransferFunction& tf, const Eigen::VectorXd& u, const Eigen::VectorXd& y,
+double cost_of(const model::TransferFunction& tf, const Eigen::VectorXd& u, const Eigen::VectorXd& y,
                double dt_s) {
   if (!tf.is_stable() || tf.delay_s < 0.0) return std::numeric_limits<double>::infinity();
-  const double v = (y - simulate(tf, u, dt_s)).squaredNorm() / static_cast<double>(y.size());
+  const double v = (y - model::simulate(tf, u, dt_s)).squaredNorm() / static_cast<double>(y.size());
   return std::isfinite(v) ? v : std::numeric_limits<double>::infinity();
 }
 
 }  // namespace
 
 OutputErrorFit refine_output_error(const Eigen::VectorXd& u, const Eigen::VectorXd& y,
-                                   double dt_s, const TransferFunction& start,
+                                   double dt_s, const model::TransferFunction& start,
                                    bool delay_free) {
   if (u.size() != y.size()) throw std::invalid_argument("refine_output_error: u and y lengths differ");
   if (!start.is_proper()) throw std::invalid_argument("refine_output_error: improper start model");
-  const TransferFunction m0 = monic(start);
+  const model::TransferFunction m0 = model::monic(start);
   const int n = m0.order(), m = static_cast<int>(m0.num.size()) - 1;
   const Eigen::Index p = n + m + 1 + (delay_free ? 1 : 0);
   Eigen::VectorXd th(n + m + 2);
@@ -50,8 +50,8 @@ OutputErrorFit refine_output_error(const Eigen::VectorXd& u, const Eigen::Vector
   fit.cost = v;
   if (!std::isfinite(v)) return fit;
   for (int it = 0; it < kMaxIterations; ++it) {
-    const TransferFunction tf = from_theta(th, n, m);
-    const Eigen::VectorXd e = y - simulate(tf, u, dt_s);
+    const model::TransferFunction tf = from_theta(th, n, m);
+    const Eigen::VectorXd e = y - model::simulate(tf, u, dt_s);
     const Eigen::MatrixXd j = output_sensitivities(tf, u, dt_s).leftCols(p);
     const Eigen::MatrixXd jtj = j.transpose() * j;
     const Eigen::VectorXd g = j.transpose() * e;

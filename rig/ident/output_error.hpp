@@ -7,21 +7,21 @@
 
 #include <Eigen/Core>
 
-#include "rig/ident/transfer_function.hpp"
+#include "rig/model/transfer_function.hpp"
 
 namespace rig::ident {
 
 struct OutputErrorFit {
-  TransferFunction model;  // monic
+  model::TransferFunction model;  // monic
   double cost = 0.0;       // mean square residual
   int iterations = 0;
-  bool improved = false;   // the start was improved (else model == monic(start))
+  bool improved = false;   // the start was improved (else model == model::monic(start))
 };
 
 // Throws std::invalid_argument for unequal lengths or an improper start. A start that is
 // unstable is returned unchanged (improved = false).
 OutputErrorFit refine_output_error(const Eigen::VectorXd& u, const Eigen::VectorXd& y,
-                                   double dt_s, const TransferFunction& start,
+                                   double dt_s, const model::TransferFunction& start,
                                    bool delay_free);
 
 }  // namespace rig::ident

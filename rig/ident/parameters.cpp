@@ -21,21 +21,21 @@ const char* to_string(Normalisation normalisation) {
   return normalisation == Normalisation::kMonicDen ? "a_n = 1" : "b_0 = 1";
 }
 
-Eigen::VectorXd pack_parameters(const TransferFunction& tf) {
+Eigen::VectorXd pack_parameters(const model::TransferFunction& tf) {
   Eigen::VectorXd theta(tf.den.size() + tf.num.size());
   theta << tf.den, tf.num;
   return theta;
 }
 
-TransferFunction unpack_parameters(const Eigen::VectorXd& theta, ModelOrder order,
-                                   double delay_s) {
+model::TransferFunction unpack_parameters(const Eigen::VectorXd& theta, model::ModelOrder order,
+                                          double delay_s) {
   if (theta.size() != order.n + order.m + 2)
     throw std::invalid_argument("unpack_parameters: theta has " + std::to_string(theta.size()) +
                                 " entries, expected n + m + 2");
   return {theta.tail(order.m + 1), theta.head(order.n + 1), delay_s};
 }
 
-std::vector<std::string> parameter_names(ModelOrder order) {
+std::vector<std::string> parameter_names(model::ModelOrder order) {
   std::vector<std::string> names;
   // Built with append: GCC 12 warns falsely (-Wrestrict) on "a" + std::to_string(i).
   auto name = [](char letter, int power) {
@@ -48,8 +48,8 @@ std::vector<std::string> parameter_names(ModelOrder order) {
   return names;
 }
 
-TransferFunction normalise(const TransferFunction& tf, Normalisation normalisation,
-                           Eigen::MatrixXd* cov) {
+model::TransferFunction normalise(const model::TransferFunction& tf, Normalisation normalisation,
+                                  Eigen::MatrixXd* cov) {
   const Eigen::VectorXd theta = pack_parameters(tf);
   const Eigen::Index ref = normalisation == Normalisation::kMonicDen ? 0 : theta.size() - 1;
   const double r = theta(ref);
@@ -63,10 +63,10 @@ TransferFunction normalise(const TransferFunction& tf, Normalisation normalisati
   return {tf.num / r, tf.den / r, tf.delay_s};
 }
 
-std::vector<ParameterEstimate> parameter_table(const TransferFunction& tf,
+std::vector<ParameterEstimate> parameter_table(const model::TransferFunction& tf,
                                                const Eigen::MatrixXd& cov, double delay_std_s) {
-  const ModelOrder order{static_cast<int>(tf.den.size()) - 1,
-                         static_cast<int>(tf.num.size()) - 1};
+  const model::ModelOrder order{static_cast<int>(tf.den.size()) - 1,
+                                static_cast<int>(tf.num.size()) - 1};
   const Eigen::VectorXd theta = pack_parameters(tf);
   const std::vector<std::string> names = parameter_names(order);
   std::vector<ParameterEstimate> table;
@@ -78,7 +78,7 @@ std::vector<ParameterEstimate> parameter_table(const TransferFunction& tf,
   return table;
 }
 
-DerivedFigures derived_figures(const TransferFunction& tf, const Eigen::MatrixXd& cov) {
+DerivedFigures derived_figures(const model::TransferFunction& tf, const Eigen::MatrixXd& cov) {
   DerivedFigures out;
   if (tf.den.size() != 3) return out;
   const Eigen::Index p = tf.den.size() + tf.num.size();

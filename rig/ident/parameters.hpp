@@ -1,12 +1,11 @@
 // Estimated parameters with standard errors, and the figures derived from them.
 #pragma once
 
+#include <Eigen/Core>
 #include <string>
 #include <vector>
 
-#include <Eigen/Core>
-
-#include "rig/ident/transfer_function.hpp"
+#include "rig/model/transfer_function.hpp"
 
 namespace rig::ident {
 
@@ -33,23 +32,23 @@ struct DerivedFigures {
 };
 
 // Parameter vector layout used throughout: theta = [a_n ... a_0, b_m ... b_0].
-Eigen::VectorXd pack_parameters(const TransferFunction& tf);
-TransferFunction unpack_parameters(const Eigen::VectorXd& theta, ModelOrder order,
-                                   double delay_s);
-std::vector<std::string> parameter_names(ModelOrder order);
+Eigen::VectorXd pack_parameters(const model::TransferFunction& tf);
+model::TransferFunction unpack_parameters(const Eigen::VectorXd& theta, model::ModelOrder order,
+                                          double delay_s);
+std::vector<std::string> parameter_names(model::ModelOrder order);
 
 // tf rescaled to the given normalisation; the covariance of theta (layout above) is
 // transformed consistently when cov is non-null (first-order propagation).
-TransferFunction normalise(const TransferFunction& tf, Normalisation normalisation,
-                           Eigen::MatrixXd* cov = nullptr);
+model::TransferFunction normalise(const model::TransferFunction& tf, Normalisation normalisation,
+                                  Eigen::MatrixXd* cov = nullptr);
 
 // Parameter table from a normalised TF and the covariance of theta (may be empty: std
 // errors become NaN), with a final "delay_s" row.
-std::vector<ParameterEstimate> parameter_table(const TransferFunction& tf,
+std::vector<ParameterEstimate> parameter_table(const model::TransferFunction& tf,
                                                const Eigen::MatrixXd& cov, double delay_std_s);
 
 // Second-order figures with standard errors by first-order (delta-method) propagation of
 // cov (layout above; empty cov gives NaN std errors).
-DerivedFigures derived_figures(const TransferFunction& tf, const Eigen::MatrixXd& cov);
+DerivedFigures derived_figures(const model::TransferFunction& tf, const Eigen::MatrixXd& cov);
 
 }  // namespace rig::ident

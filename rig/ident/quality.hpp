@@ -19,14 +19,13 @@
 // at zero instead of amplifying noise.
 #pragma once
 
+#include <Eigen/Core>
 #include <limits>
 #include <optional>
 #include <string>
 #include <vector>
 
-#include <Eigen/Core>
-
-#include "rig/ident/transfer_function.hpp"
+#include "rig/model/transfer_function.hpp"
 #include "rig/signal/correlators.hpp"
 
 namespace rig::ident {
@@ -51,7 +50,7 @@ struct CoupledPair {
 
 struct QualityOptions {
   signal::CorrelatorOptions correlator;  // lags and zero index; dt_s is set from the data
-  ModelOrder order{2, 0};                // the most demanding order that will be estimated
+  model::ModelOrder order{2, 0};         // the most demanding order that will be estimated
   bool delay_estimated = true;           // the delay is one more unknown
   double regularisation = 1e-2;          // lambda above
   double significance_sigma = 5.0;       // no_response: peak / Bartlett std below this

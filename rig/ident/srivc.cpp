@@ -27,7 +27,7 @@ Eigen::VectorXd svf_denominator(int n, double lambda) {
 // Reflect right-half-plane roots so the prefilter 1/A stays stable.
 Eigen::VectorXd stabilised(const Eigen::VectorXd& den) {
   if (!den.allFinite()) return {};  // caller treats an empty result as a failed iterate
-  TransferFunction tf{Eigen::VectorXd::Ones(1), den, 0.0};
+  model::TransferFunction tf{Eigen::VectorXd::Ones(1), den, 0.0};
   const Eigen::VectorXcd p = tf.poles();
   bool ok = true;
   for (Eigen::Index i = 0; i < p.size(); ++i) ok = ok && p(i).real() < 0.0;
@@ -47,13 +47,12 @@ struct IvStep {
 };
 
 // One (I)V solve with prefilter 1/A; instruments from x_hat when given, else plain LS.
-IvStep iv_step(const Eigen::VectorXd& a_filter, const Eigen::VectorXd& u,
-               const Eigen::VectorXd& y, const Eigen::VectorXd* x_hat, double dt_s,
-               ModelOrder order, double delay_s) {
+IvStep iv_step(const Eigen::VectorXd& a_filter, const Eigen::VectorXd& u, const Eigen::VectorXd& y,
+               const Eigen::VectorXd* x_hat, double dt_s, model::ModelOrder order, double delay_s) {
   const int n = order.n, m = order.m;
-  const Eigen::MatrixXd yf = filtered_derivatives(a_filter, y, dt_s, 0.0);
-  const Eigen::MatrixXd uf = filtered_derivatives(a_filter, u, dt_s, delay_s);
-  const Eigen::MatrixXd xf = x_hat ? filtered_derivatives(a_filter, *x_hat, dt_s, 0.0) : yf;
+  const Eigen::MatrixXd yf = model::filtered_derivatives(a_filter, y, dt_s, 0.0);
+  const Eigen::MatrixXd uf = model::filtered_derivatives(a_filter, u, dt_s, delay_s);
+  const Eigen::MatrixXd xf = x_hat ? model::filtered_derivatives(a_filter, *x_hat, dt_s, 0.0) : yf;
   // Skip the filters' start-up transient (unknown initial conditions of the record).
   const Eigen::Index skip = std::min<Eigen::Index>(y.size() / 10, 200);
   const Eigen::Index rows = y.size() - skip;
@@ -72,8 +71,9 @@ IvStep iv_step(const Eigen::VectorXd& a_filter, const Eigen::VectorXd& u,
   return step;
 }
 
-TransferFunction tf_from(const Eigen::VectorXd& theta, ModelOrder order, double delay_s) {
-  TransferFunction tf;
+model::TransferFunction tf_from(const Eigen::VectorXd& theta, model::ModelOrder order,
+                                double delay_s) {
+  model::TransferFunction tf;
   tf.den.resize(order.n + 1);
   tf.den << 1.0, theta.head(order.n);
   tf.num = theta.tail(order.m + 1);
@@ -81,15 +81,15 @@ TransferFunction tf_from(const Eigen::VectorXd& theta, ModelOrder order, double 
   return tf;
 }
 
-double output_sse(const TransferFunction& tf, const Eigen::VectorXd& u, const Eigen::VectorXd& y,
-                  double dt_s) {
+double output_sse(const model::TransferFunction& tf, const Eigen::VectorXd& u,
+                  const Eigen::VectorXd& y, double dt_s) {
   if (!tf.is_stable()) return std::numeric_limits<double>::infinity();
   const double sse = (y - simulate(tf, u, dt_s)).squaredNorm();
   return std::isfinite(sse) ? sse : std::numeric_limits<double>::infinity();
 }
 
 struct FixedDelayFit {
-  TransferFunction tf;
+  model::TransferFunction tf;
   double sse = std::numeric_limits<double>::infinity();
   int iterations = 0;
   bool converged = false;
@@ -97,14 +97,14 @@ struct FixedDelayFit {
 
 // SRIVC at a fixed delay from the denominator a_start.
 FixedDelayFit srivc_fixed(const Eigen::VectorXd& u, const Eigen::VectorXd& y, double dt_s,
-                          ModelOrder order, double delay_s, const Eigen::VectorXd& a_start,
+                          model::ModelOrder order, double delay_s, const Eigen::VectorXd& a_start,
                           const SrivcOptions& opt) {
   FixedDelayFit fit;
   IvStep st = iv_step(a_start, u, y, nullptr, dt_s, order, delay_s);
   if (!st.ok) return fit;
   Eigen::VectorXd theta = st.theta;
   for (int it = 1; it <= opt.max_iterations; ++it) {
-    TransferFunction tf = tf_from(theta, order, delay_s);
+    model::TransferFunction tf = tf_from(theta, order, delay_s);
     tf.den = stabilised(tf.den);
     if (tf.den.size() != order.n + 1) break;  // degenerate iterate: keep the last theta
     const Eigen::VectorXd x_hat = simulate(tf, u, dt_s);
@@ -124,8 +124,8 @@ FixedDelayFit srivc_fixed(const Eigen::VectorXd& u, const Eigen::VectorXd& y, do
 }
 
 // Start: SVF least squares over a few filter cut-offs, keeping the best output error.
-Eigen::VectorXd initial_denominator(const Eigen::VectorXd& u, const Eigen::VectorXd& y,
-                                    double dt_s, ModelOrder order, double delay_s,
+Eigen::VectorXd initial_denominator(const Eigen::VectorXd& u, const Eigen::VectorXd& y, double dt_s,
+                                    model::ModelOrder order, double delay_s,
                                     const SrivcOptions& opt) {
   std::vector<double> lambdas;
   if (opt.svf_cutoff_rad_s > 0) {
@@ -139,7 +139,7 @@ Eigen::VectorXd initial_denominator(const Eigen::VectorXd& u, const Eigen::Vecto
     const Eigen::VectorXd a = svf_denominator(order.n, l);
     const IvStep st = iv_step(a, u, y, nullptr, dt_s, order, delay_s);
     if (!st.ok) continue;
-    TransferFunction tf = tf_from(st.theta, order, delay_s);
+    model::TransferFunction tf = tf_from(st.theta, order, delay_s);
     tf.den = stabilised(tf.den);
     if (tf.den.size() != order.n + 1) continue;
     const double sse = output_sse(tf, u, y, dt_s);
@@ -151,8 +151,8 @@ Eigen::VectorXd initial_denominator(const Eigen::VectorXd& u, const Eigen::Vecto
 // Dead time minimising the output error: a coarse grid with a few SRIVC iterations per point,
 // golden section on the best bracket, then full convergence at the optimum.
 FixedDelayFit search_delay(const Eigen::VectorXd& u, const Eigen::VectorXd& y, double dt_s,
-                           ModelOrder order, const Eigen::VectorXd& a_start, FixedDelayFit best,
-                           const SrivcOptions& opt) {
+                           model::ModelOrder order, const Eigen::VectorXd& a_start,
+                           FixedDelayFit best, const SrivcOptions& opt) {
   SrivcOptions quick = opt;
   quick.max_iterations = std::min(opt.max_iterations, 4);
   quick.tolerance = std::max(opt.tolerance, 1e-5);
@@ -187,14 +187,14 @@ FixedDelayFit search_delay(const Eigen::VectorXd& u, const Eigen::VectorXd& y, d
 
 }  // namespace
 
-Eigen::MatrixXd output_sensitivities(const TransferFunction& tf_in, const Eigen::VectorXd& u,
+Eigen::MatrixXd output_sensitivities(const model::TransferFunction& tf_in, const Eigen::VectorXd& u,
                                      double dt_s) {
-  const TransferFunction tf = monic(tf_in);
+  const model::TransferFunction tf = model::monic(tf_in);
   const int n = tf.order(), m = static_cast<int>(tf.num.size()) - 1;
   // y_hat = B/A u_d: d/da_i = -p^i/A y_hat, d/db_j = p^j/A u_d, d/dTd = -p B/A u_d.
   const Eigen::VectorXd y_hat = simulate(tf, u, dt_s);
-  const Eigen::MatrixXd xf = filtered_derivatives(tf.den, y_hat, dt_s, 0.0);
-  const Eigen::MatrixXd uf = filtered_derivatives(tf.den, u, dt_s, tf.delay_s);
+  const Eigen::MatrixXd xf = model::filtered_derivatives(tf.den, y_hat, dt_s, 0.0);
+  const Eigen::MatrixXd uf = model::filtered_derivatives(tf.den, u, dt_s, tf.delay_s);
   Eigen::MatrixXd j(u.size(), n + m + 2);
   j.leftCols(n) = -xf.rightCols(n);
   j.middleCols(n, m + 1) = uf.rightCols(m + 1);
@@ -205,7 +205,7 @@ Eigen::MatrixXd output_sensitivities(const TransferFunction& tf_in, const Eigen:
   } else {
     // Biproper: central difference of the simulated output.
     const double h = 0.1 * dt_s;
-    TransferFunction lo = tf, hi = tf;
+    model::TransferFunction lo = tf, hi = tf;
     lo.delay_s = std::max(0.0, tf.delay_s - h);
     hi.delay_s = tf.delay_s + h;
     j.col(n + m + 1) = (simulate(hi, u, dt_s) - simulate(lo, u, dt_s)) / (hi.delay_s - lo.delay_s);
@@ -215,7 +215,7 @@ Eigen::MatrixXd output_sensitivities(const TransferFunction& tf_in, const Eigen:
 
 SrivcResult estimate_srivc(const Eigen::VectorXd& u, const Eigen::VectorXd& y, double dt_s,
                            const SrivcOptions& opt) {
-  const ModelOrder order = opt.order;
+  const model::ModelOrder order = opt.order;
   if (u.size() != y.size() || u.size() < 20 * (order.n + order.m + 2))
     throw std::invalid_argument("estimate_srivc: u and y must be equally long and >= 20 p samples");
   if (order.n < 1 || order.m < 0 || order.m >= order.n + 1 || !(dt_s > 0.0))
@@ -236,7 +236,7 @@ SrivcResult estimate_srivc(const Eigen::VectorXd& u, const Eigen::VectorXd& y, d
   res.converged = best.converged;
   const Eigen::Index N = y.size(), p = order.n + order.m + 2;
   res.noise_variance = best.sse / static_cast<double>(N - p);
-  res.fit_pct = fit_percent(y, simulate(res.model, u, dt_s));
+  res.fit_pct = model::fit_percent(y, simulate(res.model, u, dt_s));
   // Output-error covariance sigma^2 (J^T J)^-1, J the output sensitivities (incl. Td).
   const Eigen::MatrixXd jac = output_sensitivities(res.model, u, dt_s);
   Eigen::MatrixXd info = jac.transpose() * jac;

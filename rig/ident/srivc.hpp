@@ -9,18 +9,17 @@
 // by a 1-D search on the output-error cost.
 #pragma once
 
+#include <Eigen/Core>
 #include <optional>
 #include <vector>
 
-#include <Eigen/Core>
-
 #include "rig/ident/parameters.hpp"
-#include "rig/ident/transfer_function.hpp"
+#include "rig/model/transfer_function.hpp"
 
 namespace rig::ident {
 
 struct SrivcOptions {
-  ModelOrder order;
+  model::ModelOrder order;
   std::optional<double> delay_s;  // nullopt: searched over [0, max_delay_s]
   double max_delay_s = 0.5;
   int max_iterations = 30;
@@ -29,7 +28,7 @@ struct SrivcOptions {
 };
 
 struct SrivcResult {
-  TransferFunction model;                     // monic denominator
+  model::TransferFunction model;              // monic denominator
   std::vector<ParameterEstimate> parameters;  // with std errors, last row delay_s
   Eigen::MatrixXd covariance;                 // of [a_{n-1}..a_0, b_m..b_0, Td]
   double delay_s = 0.0;
@@ -46,7 +45,7 @@ SrivcResult estimate_srivc(const Eigen::VectorXd& u, const Eigen::VectorXd& y, d
 
 // Output sensitivities d y_hat / d theta for theta = [a_{n-1}..a_0, b_m..b_0, Td] of the
 // monic model tf driven by u (columns, N rows): the Jacobian of the output-error model.
-Eigen::MatrixXd output_sensitivities(const TransferFunction& tf, const Eigen::VectorXd& u,
+Eigen::MatrixXd output_sensitivities(const model::TransferFunction& tf, const Eigen::VectorXd& u,
                                      double dt_s);
 
 }  // namespace rig::ident

@@ -1,16 +1,12 @@
-// Whole-file writes that a concurrent reader (or a crash) never sees half done: the text
-// goes to `path.tmp`, is flushed to disk, and is renamed over `path` (rename is atomic).
+// Atomic whole-file writes live in the leaf library (rig/model/atomic_file.hpp) because the
+// model and FRF writers there need them; rig::io uses them under its own names.
 #pragma once
 
-#include <filesystem>
-#include <string_view>
+#include "rig/model/atomic_file.hpp"
 
 namespace rig::io {
 
-// Throws InputError (naming the file) when the folder is not writable.
-void write_file_atomic(const std::filesystem::path& path, std::string_view text);
-
-// Reads a whole file; InputError when it cannot be opened.
-std::string read_file_text(const std::filesystem::path& path);
+using model::read_file_text;
+using model::write_file_atomic;
 
 }  // namespace rig::io

@@ -18,36 +18,50 @@ ConstMap as_vector(const std::vector<double>& v) {
   return ConstMap(v.data(), static_cast<Eigen::Index>(v.size()));
 }
 
-void final_estimate(OnlineMmfm& online, double correction_s, ExcitationResult& out) {
+void final_estimate(OnlineMmfm& online, ExcitationResult& out) {
   try {
-    auto& m = out.mmfm.emplace(online.final_result());
+    out.mmfm.emplace(online.final_result());
     out.order_choice = online.final_choice();
-    if (out.order_choice) {
-      for (auto& c : out.order_choice->candidates) {
-        c.model.delay_s = std::max(0.0, c.model.delay_s + correction_s);
-      }
-    }
-    m.delay_s = std::max(0.0, m.delay_s + correction_s);
-    m.model.delay_s = m.delay_s;
-    if (!m.parameters.empty() && m.parameters.back().name == "delay_s") {
-      m.parameters.back().value = m.delay_s;
-    }
   } catch (const std::exception& ex) {
     out.mmfm.reset();
     out.mmfm_error = ex.what();
   }
 }
 
-std::vector<fra::FrfPoint> h1(const ExcitationRecord& r, const TestConfig& c) {
+// An estimate's dead time, and its delay_s parameter when it has one, moved to the plant's.
+void correct_delay(std::vector<ident::ParameterEstimate>& parameters, double& delay_s,
+                   double correction_s) {
+  delay_s = plant_delay_s(delay_s, correction_s);
+  if (!parameters.empty() && parameters.back().name == "delay_s") {
+    parameters.back().value = delay_s;
+  }
+}
+
+// The sample-timing correction, applied once to everything the excitation yields: the live
+// estimates, the final model and its candidate structures, and H1 (docs/decisions.md, "Sample timing correction").
+void correct_timing(ExcitationResult& out, double correction_s) {
+  for (auto& h : out.history) {
+    correct_delay(h.parameters, h.delay_s, correction_s);
+    if (h.ok) h.model.delay_s = h.delay_s;
+  }
+  if (out.order_choice) {
+    for (auto& c : out.order_choice->candidates) {
+      c.model.delay_s = plant_delay_s(c.model.delay_s, correction_s);
+    }
+  }
+  if (out.mmfm) {
+    correct_delay(out.mmfm->parameters, out.mmfm->delay_s, correction_s);
+    out.mmfm->model.delay_s = out.mmfm->delay_s;
+  }
+  model::add_delay(out.h1, correction_s);
+}
+
+std::vector<model::FrfPoint> h1(const ExcitationRecord& r, const TestConfig& c) {
   fra::WelchOptions w;
   w.segment_length = std::min<Eigen::Index>(1024, static_cast<Eigen::Index>(r.u_pct.size()) / 4);
   w.f_min_hz = 0.05;
   w.f_max_hz = std::min(0.5 / r.dt_s, 2.0 * c.sweep.to_hz);
-  auto frf = fra::h1_estimate(as_vector(r.u_pct), as_vector(r.y_kw), r.dt_s, w);
-  for (auto& p : frf) {
-    p.phase_deg = fra::wrap_deg(p.phase_deg - 360.0 * p.freq_hz * r.timing_correction_s);
-  }
-  return frf;
+  return fra::h1_estimate(as_vector(r.u_pct), as_vector(r.y_kw), r.dt_s, w);
 }
 
 // The pre-estimation checks of rig/ident/quality, after the same matched AC coupling the
@@ -78,19 +92,20 @@ std::vector<std::string> fatal_quality_flags(const ExcitationRecord& r, const Te
 
 }  // namespace
 
+double plant_delay_s(double estimated_delay_s, double timing_correction_s) {
+  return std::max(0.0, estimated_delay_s + timing_correction_s);
+}
+
 void analyse_excitation(OnlineMmfm& online, const ExcitationRecord& r, const TestConfig& c,
                         ExcitationResult& out) {
   online.finish();
   out.duration_s = static_cast<double>(r.u_pct.size()) * r.dt_s;
   out.history = online.history();
-  for (auto& h : out.history) {
-    h.delay_s += r.timing_correction_s;
-    if (h.ok) h.model.delay_s = h.delay_s;
-  }
   out.ruu = online.ruu();
   out.ryu = online.ryu();
-  final_estimate(online, r.timing_correction_s, out);
+  final_estimate(online, out);
   if (r.u_pct.size() >= 512) out.h1 = h1(r, c);
+  correct_timing(out, r.timing_correction_s);
   const ConstMap u = as_vector(r.u_pct);
   if (u.size() > 1) {
     out.applied_std_pct =

@@ -19,7 +19,12 @@ struct ExcitationRecord {
   double timing_correction_s = 0.0;  // RunContext::timing_correction_s()
 };
 
-// Fills everything of `out` but planned_std_pct and stop_reason.
+// The plant's dead time from one estimated on the rig's samples (never below 0): the one place
+// the sample-timing correction meets a delay (RunContext::timing_correction_s).
+double plant_delay_s(double estimated_delay_s, double timing_correction_s);
+
+// Fills everything of `out` but planned_std_pct and stop_reason; delays and phases refer to
+// the plant (the timing correction is applied once, at the end).
 void analyse_excitation(OnlineMmfm& online, const ExcitationRecord& record, const TestConfig& c,
                         ExcitationResult& out);
 

@@ -137,7 +137,7 @@ class ExcitePhase final : public SupervisedPhase {
     } else {
       for (const auto& p : e.parameters) est.push_back({p.name, p.value, p.std_error});
     }
-    est.push_back({"Td", e.delay_s + record_.timing_correction_s,
+    est.push_back({"Td", plant_delay_s(e.delay_s, record_.timing_correction_s),
                    e.parameters.empty() ? 0.0 : e.parameters.back().std_error});
     est.push_back({"order", static_cast<double>(e.order.n), 0.0});
     if (std::isfinite(e.band_db95)) est.push_back({"+-dB", e.band_db95, 0.0});

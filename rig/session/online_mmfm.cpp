@@ -152,7 +152,7 @@ BlockEstimate OnlineMmfm::refresh(const Snapshot& s) {
         ident::choose_order(s.u, s.y, options_.correlator.dt_s, s.ruu, s.ryu, choice_options(), warm_);
     for (const auto& c : choice.candidates) {
       if (!c.ok) continue;
-      if (c.order == ident::ModelOrder{2, 0}) {
+      if (c.order == model::ModelOrder{2, 0}) {
         e.derived = ident::derived_figures(c.model, parameter_covariance(c, !options_.delay_s).first);
       }
     }
@@ -211,7 +211,7 @@ ident::MmfmResult OnlineMmfm::final_result() const {
   r.parameters = ident::parameter_table(r.model, cov, delay_sd);
   r.derived = ident::derived_figures(r.model, cov);
   r.model_ryu = ident::model_cross_correlation(r.model, ruu, ryu);
-  r.correlation_fit_pct = ident::fit_percent(ryu.r, r.model_ryu.r);
+  r.correlation_fit_pct = model::fit_percent(ryu.r, r.model_ryu.r);
   r.refined = true;
   return r;
 }

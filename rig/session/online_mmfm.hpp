@@ -38,13 +38,13 @@ namespace rig::session {
 // The candidates of the automatic order, simplest first: the thesis's second order, a third
 // pole (the governor and transducer lags that add to the dead time), a zero with it, and a
 // fourth pole (so that the third order's own bias shows in its widened band).
-inline const std::vector<ident::ModelOrder> kAutoOrders = {{2, 0}, {3, 0}, {3, 1}, {4, 1}};
+inline const std::vector<model::ModelOrder> kAutoOrders = {{2, 0}, {3, 0}, {3, 1}, {4, 1}};
 // Frequencies of the compare band where the stopping rule judges the response.
 inline constexpr int kCompareFrequencies = 24;
 
 struct OnlineMmfmOptions {
-  ident::ModelOrder order;             // the structure when `orders` is empty
-  std::vector<ident::ModelOrder> orders;  // candidates, simplest first (automatic order)
+  model::ModelOrder order;             // the structure when `orders` is empty
+  std::vector<model::ModelOrder> orders;  // candidates, simplest first (automatic order)
   std::optional<double> delay_s;       // nullopt: estimated
   signal::CorrelatorOptions correlator;
   Eigen::Index block_samples = 1024;
@@ -55,7 +55,7 @@ struct OnlineMmfmOptions {
   double target_db = 0.5;              // 95 % band half-widths of the stopping rule
   double target_deg = 3.0;
   bool asynchronous = false;  // estimate on a worker thread (else inside push())
-  std::optional<ident::TransferFunction> prior;  // a start model for every order (pilot's)
+  std::optional<model::TransferFunction> prior;  // a start model for every order (pilot's)
 };
 
 // One refresh, after a block.
@@ -64,8 +64,8 @@ struct BlockEstimate {
   int block = 0;
   bool ok = false;                                   // false: the estimator failed on this block
   std::string error;                                 // why, when !ok
-  ident::TransferFunction model;                     // the chosen structure, monic, with delay
-  ident::ModelOrder order;
+  model::TransferFunction model;                     // the chosen structure, monic, with delay
+  model::ModelOrder order;
   std::vector<ident::ParameterEstimate> parameters;  // with asymptotic standard errors
   ident::DerivedFigures derived;  // gain, fn, zeta with se of the second-order candidate
   double delay_s = 0.0;

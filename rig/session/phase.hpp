@@ -29,6 +29,12 @@
 
 namespace rig::session {
 
+// The supervisor settings a test file states (band, clamp, ramp, back-off, bias echo in ticks
+// at its sample rate); the rest keeps SupervisorConfig's defaults. RunContext adds what the
+// run measures (P0, noise, mode, acknowledgement). A test file without [safety] gives
+// SupervisorConfig{} (both take their defaults from safety_defaults.hpp).
+SupervisorConfig supervisor_config_from(const TestConfig& config);
+
 class RunContext {
  public:
   RunContext(SessionData& data, drivers::GovernorLink& link, io::RecordingWriter& recorder,
@@ -65,7 +71,7 @@ class RunContext {
   // correction c = read_lag - dt/2 is added to estimated delays and removed from measured
   // phases (phase -= 360 f c), so that models and FRFs describe the plant itself.
   double timing_correction_s() const;
-  void correct_timing(std::vector<fra::FrfPoint>& frf) const;
+  void correct_timing(std::vector<model::FrfPoint>& frf) const;
 
   // Phase-change work (estimates, plans) runs off the loop thread in real time; meanwhile the
   // loop writes the baseline and reads every period, so neither the heartbeat nor the sample

@@ -34,31 +34,35 @@ void RunContext::fail(int code, const std::string& outcome) {
   loop.event(code == kExitSafety ? "trip" : "fault", outcome);
 }
 
-SupervisorConfig RunContext::supervisor_config(double peak_to_rms) const {
-  const TestConfig& c = config;
+SupervisorConfig supervisor_config_from(const TestConfig& c) {
+  const double rate_hz = c.link.sample_rate_hz;
   SupervisorConfig s;
-  s.p0_kw = p0_kw;
   s.band_fraction = c.safety.band_pct / 100.0;
   s.band_override = c.safety.allow_band_above_3pct;
   s.baseline_bias_pct = 0.0;
   s.clamp_pct = c.safety.clamp_pct;
   s.ramp_rate_pct_per_s = c.safety.ramp_pct_per_s;
-  s.dt_s = loop.dt_s();
+  s.dt_s = 1.0 / rate_hz;
   s.backoff.zero_fraction = std::max(c.safety.backoff_fraction, s.backoff.start_fraction + 0.05);
   s.backoff.plan_fraction = c.safety.plan_fraction;
+  s.echo.tolerance_pct = c.safety.echo_tolerance_pct;
+  s.echo.relative_tolerance = safety_defaults::kEchoRelativeTolerance;
+  s.echo.delay_ticks = std::min(63, safety_defaults::ticks_at(c.safety.echo_delay_s, rate_hz));
+  s.echo.max_bad_ticks = safety_defaults::ticks_at(c.safety.echo_max_bad_s, rate_hz);
+  return s;
+}
+
+SupervisorConfig RunContext::supervisor_config(double peak_to_rms) const {
+  SupervisorConfig s = supervisor_config_from(config);
+  s.p0_kw = p0_kw;
   s.backoff.peak_to_rms = peak_to_rms;
-  s.backoff.resonance_hz = std::min(resonance_hz, 0.9 * c.link.sample_rate_hz / 6.0);
+  s.backoff.resonance_hz = std::min(resonance_hz, 0.9 * config.link.sample_rate_hz / 6.0);
   s.noise_rms_kw = noise_kw();
   s.plausible = plausible;
   if (acknowledged) {
     // Layer 0: from activation on the governor must keep the bias active and echo it.
     s.required_status_mask |= drivers::kBiasActive;
     s.echo.enabled = true;
-    s.echo.tolerance_pct = c.safety.echo_tolerance_pct;
-    s.echo.delay_ticks = std::min(
-        63, static_cast<int>(std::ceil(c.safety.echo_delay_s * c.link.sample_rate_hz - 1e-9)));
-    s.echo.max_bad_ticks =
-        static_cast<int>(std::ceil(c.safety.echo_max_bad_s * c.link.sample_rate_hz - 1e-9));
   }
   return s;
 }
@@ -77,9 +81,8 @@ double RunContext::timing_correction_s() const {
   return read_lag_s - 0.5 * dt_s();
 }
 
-void RunContext::correct_timing(std::vector<fra::FrfPoint>& frf) const {
-  const double c = timing_correction_s();
-  for (auto& p : frf) p.phase_deg = fra::wrap_deg(p.phase_deg - 360.0 * p.freq_hz * c);
+void RunContext::correct_timing(std::vector<model::FrfPoint>& frf) const {
+  model::add_delay(frf, timing_correction_s());
 }
 
 double fade_out(long j, long n) {

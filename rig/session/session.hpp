@@ -68,7 +68,7 @@ struct ExcitationResult {
   std::optional<ident::OrderChoice> order_choice;  // its candidate structures (order table)
   std::string mmfm_error;
   signal::Correlation ruu, ryu;   // online correlations (AC-coupled)
-  std::vector<fra::FrfPoint> h1;  // noise-driven FRF of the excitation record
+  std::vector<model::FrfPoint> h1;  // noise-driven FRF of the excitation record
 };
 
 // Everything the report is made of: the run, one result per phase, the loop's record and the
@@ -84,7 +84,7 @@ struct SessionData {
   std::optional<ActivationResult> activation;
   std::optional<PilotResult> pilot;
   ExcitationResult excitation;
-  std::vector<fra::FrfPoint> sweep;  // the swept-sine FRF
+  std::vector<model::FrfPoint> sweep;  // the swept-sine FRF
   RampDownResult ramp_down;
   std::optional<fra::CompareResult> compare_sweep, compare_h1;
 

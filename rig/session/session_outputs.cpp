@@ -2,8 +2,8 @@
 
 #include <fmt/format.h>
 
-#include "rig/io/frf_file.hpp"
-#include "rig/io/model_file.hpp"
+#include "rig/model/frf_file.hpp"
+#include "rig/model/model_file.hpp"
 #include "rig/report/json_out.hpp"
 
 namespace rig::session {
@@ -51,7 +51,7 @@ json compare_json(const std::optional<fra::CompareResult>& c) {
           {"rows", rows}};
 }
 
-json frf_json(const std::vector<fra::FrfPoint>& frf) {
+json frf_json(const std::vector<model::FrfPoint>& frf) {
   json a = json::array();
   for (const auto& p : frf) {
     a.push_back({{"freq_hz", p.freq_hz},
@@ -77,7 +77,7 @@ json candidates_json(const std::optional<ident::OrderChoice>& choice) {
       e["band_deg95"] = number_or_null(c.width.deg);
       if (c.order.n == 2) {
         // The thesis's q-form: 1 / (q2 s^2 + q1 s + q0) with b0 = 1, and K, fn, zeta.
-        const ident::TransferFunction q = ident::normalise(c.model, ident::Normalisation::kUnitB0);
+        const model::TransferFunction q = ident::normalise(c.model, ident::Normalisation::kUnitB0);
         e["q_form"] = {{"q2", q.den(0)}, {"q1", q.den(1)}, {"q0", q.den(2)}};
         e["derived"] = derived_json(ident::derived_figures(c.model, Eigen::MatrixXd()));
       }
@@ -261,23 +261,6 @@ json report_json(const SessionData& d) {
 
 namespace {
 
-io::Frf to_frf(const std::vector<fra::FrfPoint>& pts) {
-  io::Frf f;
-  const auto n = static_cast<Eigen::Index>(pts.size());
-  f.freq_hz.resize(n);
-  f.mag.resize(n);
-  f.phase_deg.resize(n);
-  f.coherence.resize(n);
-  for (Eigen::Index i = 0; i < n; ++i) {
-    const auto& p = pts[static_cast<std::size_t>(i)];
-    f.freq_hz(i) = p.freq_hz;
-    f.mag(i) = p.mag;
-    f.phase_deg(i) = p.phase_deg;
-    f.coherence(i) = std::clamp(p.coherence, 0.0, 1.0);
-  }
-  return f;
-}
-
 template <class Fn>
 bool attempt(const char* what, Fn fn) {
   try {
@@ -297,7 +280,7 @@ bool write_outputs(const SessionData& d, const std::filesystem::path& out) {
   // A model only from a run that passed: a failed run writes none (DESIGN.md section 8).
   if (d.excitation.mmfm && d.exit_code == kExitOk) {
     attempt("model.json", [&] {
-      io::ModelFile m;
+      model::ModelFile m;
       m.tf = d.excitation.mmfm->model;
       m.tf.delay_s = d.excitation.mmfm->delay_s;
       m.input.assign(1, 'u');
@@ -308,13 +291,12 @@ bool write_outputs(const SessionData& d, const std::filesystem::path& out) {
       // Its dead time refers to the plant: the rig's sample timing (bias held for a sample,
       // power read a sample after the write in lockstep) is taken out (docs/decisions.md).
       m.extra["timing"] = "plant";
-      io::write_model(out / "model.json", m);
+      model::write_model(out / "model.json", m);
     });
   }
-  if (!d.sweep.empty())
-    attempt("sweep.csv", [&] { io::write_frf(out / "sweep.csv", to_frf(d.sweep)); });
+  if (!d.sweep.empty()) attempt("sweep.csv", [&] { model::write_frf(out / "sweep.csv", d.sweep); });
   if (!d.excitation.h1.empty())
-    attempt("h1.csv", [&] { io::write_frf(out / "h1.csv", to_frf(d.excitation.h1)); });
+    attempt("h1.csv", [&] { model::write_frf(out / "h1.csv", d.excitation.h1); });
   bool ok =
       attempt("report.json", [&] { report::write_json_file(out / "report.json", report_json(d)); });
   ok = attempt("report.html", [&] { write_report_html(d, out / "report.html"); }) && ok;

@@ -136,7 +136,7 @@ void bode(report::HtmlReport& page, const SessionData& d) {
   for (const auto& p : d.excitation.h1)
     if (p.freq_hz >= f_lo && p.freq_hz <= f_hi) grid.insert(p.freq_hz);
   const std::vector<double> f(grid.begin(), grid.end());
-  auto measured = [&](const std::vector<fra::FrfPoint>& pts) {
+  auto measured = [&](const std::vector<model::FrfPoint>& pts) {
     std::vector<std::complex<double>> h(f.size(), {kNaN, kNaN});
     for (const auto& p : pts) {
       const auto it = std::lower_bound(f.begin(), f.end(), p.freq_hz);
@@ -159,7 +159,7 @@ void bode(report::HtmlReport& page, const SessionData& d) {
   phase.series = phase_series(f, curves);
   page.section("Frequency response").chart(mag).chart(phase);
   report::Chart coh{"Coherence", "frequency (Hz)", "coherence", f, {}, {}, true, false, 220};
-  auto coherence = [&](const std::vector<fra::FrfPoint>& pts, const std::string& label,
+  auto coherence = [&](const std::vector<model::FrfPoint>& pts, const std::string& label,
                        const std::string& color) {
     report::Series s{label, std::vector<double>(f.size(), kNaN), color, false, true, 1.5};
     for (const auto& p : pts) {

@@ -22,7 +22,7 @@ constexpr double kClipLevel = 0.85;  // clip at this share of the current peak
 constexpr double kNoisePeakSigmas = 3.0;
 constexpr Eigen::Index kPilotLags = 256;
 
-ident::TransferFunction pilot_model(const std::vector<double>& u_raw,
+model::TransferFunction pilot_model(const std::vector<double>& u_raw,
                                     const std::vector<double>& y_raw, const ShapedLimits& l) {
   const auto n = static_cast<Eigen::Index>(u_raw.size());
   Eigen::VectorXd u = Eigen::Map<const Eigen::VectorXd>(u_raw.data(), n);
@@ -36,7 +36,7 @@ ident::TransferFunction pilot_model(const std::vector<double>& u_raw,
   w.dt_s = l.dt_s;
   ident::MmfmOptions m;
   m.order = {2, 0};
-  const ident::TransferFunction start =
+  const model::TransferFunction start =
       ident::estimate_mmfm(signal::auto_correlation(u, w), signal::cross_correlation(y, u, w), m)
           .model;
   return ident::refine_output_error(u, y, l.dt_s, start, true).model;
@@ -48,7 +48,7 @@ struct Lines {
   std::vector<double> gain_phase;        // arg G
 };
 
-Lines plan_lines(const ident::TransferFunction& g, const ShapedLimits& l, ShapedDesign& d) {
+Lines plan_lines(const model::TransferFunction& g, const ShapedLimits& l, ShapedDesign& d) {
   const double f0 = 1.0 / (kShapedPeriodSamples * l.dt_s);
   const int k_lo = std::max(1, static_cast<int>(std::ceil(l.f_lo_hz / f0)));
   const int k_hi = std::min(kShapedPeriodSamples / 2 - 1, static_cast<int>(std::floor(l.f_hi_hz / f0)));

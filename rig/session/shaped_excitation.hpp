@@ -27,7 +27,7 @@
 
 #include <Eigen/Core>
 
-#include "rig/ident/transfer_function.hpp"
+#include "rig/model/transfer_function.hpp"
 
 namespace rig::session {
 
@@ -50,7 +50,7 @@ struct ShapedLimits {
 struct ShapedDesign {
   bool ok = false;
   std::string reason;            // why not, when !ok
-  ident::TransferFunction pilot_model;
+  model::TransferFunction pilot_model;
   Eigen::VectorXd period_pct;    // one period of the excitation, scaled (% of rated power)
   int lines = 0;
   double f_lo_hz = 0.0, f_hi_hz = 0.0;

@@ -60,6 +60,7 @@
 #include <string>
 
 #include "drivers/governor_link.hpp"
+#include "rig/session/safety_defaults.hpp"
 
 namespace rig::session {
 
@@ -86,17 +87,19 @@ struct SupervisorConfigError : std::invalid_argument {
 
 struct BackoffConfig {
   double start_fraction = 0.6;       // envelope / band where the scale starts to fall
-  double zero_fraction = 0.9;        // envelope / band where the scale reaches 0
+  double zero_fraction = safety_defaults::kBackoffFraction;  // envelope / band: scale 0
   double envelope_release_s = 2.0;   // peak-hold decay time constant
   double recover_rate_per_s = 0.1;   // fastest rise of the scale (soft start: 10 s to 1)
   double fall_rate_per_s = 5.0;      // fastest fall of the scale (1 to 0 in 0.2 s, no step)
   double min_gain_share = 0.05;      // learn g^2 only while ms(u) >= this ms(r)
   double resonance_hz = 2.0;         // dominant mode (prior or pilot); 0: no derivative term
-  double plan_fraction = 0.8;        // statistical cap: predicted peak within this of the band
+  double plan_fraction = safety_defaults::kPlanFraction;  // cap: predicted peak, band share
   double peak_to_rms = 4.0;          // response peak / rms: 4 for Gaussian noise excitation,
                                      // ~2 for a sine (sqrt 2 and margin); 0 disables the cap
   double rms_time_constant_s = 2.0;  // averaging of the variance and mean squares
   double statistics_hold_s = 20.0;   // release of the held gain g^2 and request ms(r)
+
+  bool operator==(const BackoffConfig&) const = default;
 };
 
 // The back-off envelope of (2) above, one sample at a time.
@@ -118,26 +121,36 @@ class DeviationEnvelope {
 // Layer 0: the governor applies what it is sent (DESIGN.md section 8).
 struct EchoCheck {
   bool enabled = false;
-  double tolerance_pct = 0.02;      // absolute, % of rated (20 quantisation steps)
-  double relative_tolerance = 0.1;  // plus this share of |command|
-  int delay_ticks = 5;              // the echo may lag the command this many ticks
-  int max_bad_ticks = 5;            // consecutive mismatches allowed; one more trips
+  double tolerance_pct = safety_defaults::kEchoTolerancePct;            // absolute, % of rated
+  double relative_tolerance = safety_defaults::kEchoRelativeTolerance;  // plus |command| share
+  // The echo may lag the command this many ticks; consecutive mismatches allowed (one more
+  // trips). Defaults: the test file's seconds at its default sample rate.
+  int delay_ticks =
+      safety_defaults::ticks_at(safety_defaults::kEchoDelayS, safety_defaults::kSampleRateHz);
+  int max_bad_ticks =
+      safety_defaults::ticks_at(safety_defaults::kEchoMaxBadS, safety_defaults::kSampleRateHz);
+
+  bool operator==(const EchoCheck&) const = default;
 };
 
 // Readings that cannot be true of a running set.
 struct PlausibilityCheck {
   bool speed = false;  // speed_rpm must stay > 0 (on when the steady state saw a speed)
   bool freq = false;   // freq_hz must stay > 0 (on when the steady state saw a frequency)
+
+  bool operator==(const PlausibilityCheck&) const = default;
 };
 
 struct SupervisorConfig {
   double p0_kw = 0.0;                // steady power from the steady-state check
-  double band_fraction = 0.03;       // |P - P0| <= band_fraction P0; > 0.03 needs the override
+  // Defaults from rig/session/safety_defaults.hpp, shared with the test file's SafetySettings.
+  double band_fraction = safety_defaults::kBandPct / 100.0;  // |P - P0| <= band_fraction P0;
+                                                             // > 0.03 needs the override
   bool band_override = false;        // explicit permission for a band above 3 % (recorded)
   double baseline_bias_pct = 0.0;    // bias before excitation, the ramp's target
-  double clamp_pct = 2.0;            // |bias| <= clamp_pct, independent of every estimate
-  double ramp_rate_pct_per_s = 1.0;  // return to baseline after a trip or at the end
-  double dt_s = 0.01;                // tick period
+  double clamp_pct = safety_defaults::kClampPct;  // |bias| <= this, whatever the estimate
+  double ramp_rate_pct_per_s = safety_defaults::kRampPctPerS;  // back to baseline (trip, end)
+  double dt_s = 1.0 / safety_defaults::kSampleRateHz;          // tick period
   double noise_rms_kw = 0.0;         // power noise without excitation (steady-state check)
   int stale_ticks = 3;               // unchanged counter for this many consecutive ticks trips
   std::uint16_t trip_status_mask = drivers::kHeartbeatLost | drivers::kPlantFault;
@@ -147,6 +160,7 @@ struct SupervisorConfig {
   PlausibilityCheck plausible;
 
   double band_kw() const { return band_fraction * p0_kw; }
+  bool operator==(const SupervisorConfig&) const = default;
 };
 
 // Throws SupervisorConfigError with a one-line message naming the field.
@@ -188,7 +202,7 @@ class Supervisor {
   bool tripped() const { return trip_.has_value(); }
   const std::optional<TripRecord>& trip_record() const { return trip_; }
   const SupervisorConfig& config() const { return config_; }
-  bool band_overridden() const { return config_.band_fraction > 0.03; }
+  bool band_overridden() const { return config_.band_fraction > kStandardBandPct / 100.0; }
   std::uint64_t ticks() const { return tick_; }
 
  private:

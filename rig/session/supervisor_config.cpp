@@ -54,7 +54,7 @@ const char* to_string(TripCause cause) {
 
 namespace {
 
-constexpr double kMaxBandWithoutOverride = 0.03;
+constexpr double kMaxBandWithoutOverride = kStandardBandPct / 100.0;
 
 void require(bool ok, const char* what) {
   if (!ok) throw SupervisorConfigError(std::string("supervisor config: ") + what);

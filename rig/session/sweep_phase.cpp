@@ -28,10 +28,10 @@ constexpr double kFlatPriorPeakFactor = 5.0;
 
 // Sweep without an excitation phase: a second-order MMFM fit of the pilot record, else the
 // flat prior.
-ident::TransferFunction prior_from_pilot(RunContext& ctx) {
+model::TransferFunction prior_from_pilot(RunContext& ctx) {
   try {
     ident::IdentifyOptions o;
-    o.order = ident::ModelOrder{2, 0};
+    o.order = model::ModelOrder{2, 0};
     o.correlator.lags = ctx.config.mmfm.lags;
     const auto& u = ctx.pilot_u;
     const auto& y = ctx.pilot_y;
@@ -43,7 +43,7 @@ ident::TransferFunction prior_from_pilot(RunContext& ctx) {
   } catch (const std::exception& ex) {
     ctx.loop.event("warning", std::string("pilot model failed, flat prior used: ") + ex.what());
   }
-  ident::TransferFunction flat;
+  model::TransferFunction flat;
   const double g = ctx.data.pilot ? ctx.data.pilot->gain_kw_per_pct : 1.0;
   flat.num = Eigen::VectorXd::Constant(1, kFlatPriorPeakFactor * g);
   flat.den = Eigen::VectorXd::Constant(1, 1.0);
@@ -60,7 +60,7 @@ double sine_plan_fraction(const RunContext& ctx) {
 // Largest sine amplitude whose sudden stop (a trip, or the step from one point to the next)
 // stays below that fraction: a step of A gives a peak of A |K| (1 + overshoot) for a
 // second-order mode, overshoot = exp(-pi zeta / sqrt(1 - zeta^2)); without a model, 1.
-double step_safe_amplitude_pct(const RunContext& ctx, const ident::TransferFunction& prior,
+double step_safe_amplitude_pct(const RunContext& ctx, const model::TransferFunction& prior,
                                const ident::DerivedFigures& d) {
   const double gain = std::abs(prior.dc_gain());
   if (!(gain > 0.0) || !std::isfinite(gain)) return ctx.config.safety.clamp_pct;
@@ -71,7 +71,7 @@ double step_safe_amplitude_pct(const RunContext& ctx, const ident::TransferFunct
   return sine_plan_fraction(ctx) * ctx.band_kw() / (gain * (1.0 + overshoot));
 }
 
-fra::SweepPlanOptions plan_options(const RunContext& ctx, const ident::TransferFunction& prior,
+fra::SweepPlanOptions plan_options(const RunContext& ctx, const model::TransferFunction& prior,
                                    const ident::DerivedFigures& d) {
   const TestConfig& c = ctx.config;
   fra::SweepPlanOptions p;
@@ -111,7 +111,7 @@ class SweepPhase final : public SupervisedPhase {
   bool prepare(RunContext& ctx) override {
     if (!ctx.config.sweep.enabled) return false;
     const auto& mmfm = ctx.data.excitation.mmfm;
-    const ident::TransferFunction prior = mmfm ? mmfm->model : prior_from_pilot(ctx);
+    const model::TransferFunction prior = mmfm ? mmfm->model : prior_from_pilot(ctx);
     const auto d = mmfm ? mmfm->derived : ident::DerivedFigures{};
     const fra::SweepPlanOptions p = plan_options(ctx, prior, d);
     std::string error;

@@ -10,18 +10,17 @@
 #include <stdexcept>
 #include <string>
 
+#include "rig/session/safety_defaults.hpp"
+
 namespace rig::session {
 
 struct ConfigError : std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
-// The largest power band allowed without an explicit override (DESIGN.md section 8).
-inline constexpr double kStandardBandPct = 3.0;
-
 struct LinkSettings {
   std::string uri;                // e.g. modbus+tcp://127.0.0.1:1502?unit=1
-  double sample_rate_hz = 100.0;  // one write/read exchange per sample
+  double sample_rate_hz = safety_defaults::kSampleRateHz;  // one write/read exchange per sample
   int lockstep_ticks = 0;         // > 0: simulated plant advanced this many ticks per sample
   double timeout_s = 0.5;         // response timeout per request
 };
@@ -31,18 +30,19 @@ struct PlantSettings {
   std::string preset;              // emulated plant preset (recorded only)
 };
 
+// Defaults from rig/session/safety_defaults.hpp, shared with SupervisorConfig.
 struct SafetySettings {
-  double band_pct = kStandardBandPct;  // |P - P0| <= band_pct % of P0
-  bool allow_band_above_3pct = false;  // required for band_pct > 3 (recorded in the report)
-  double plan_fraction = 0.8;          // planned peak deviation as a fraction of the band
-  double backoff_fraction = 0.9;       // amplitude backs off above this fraction of the band
-  double clamp_pct = 5.0;              // |bias| never exceeds this (% of rated power)
-  double ramp_pct_per_s = 2.0;         // bias ramp rate at start-up and ramp-down
+  double band_pct = safety_defaults::kBandPct;  // |P - P0| <= band_pct % of P0
+  bool allow_band_above_3pct = false;           // required for band_pct > 3 (in the report)
+  double plan_fraction = safety_defaults::kPlanFraction;        // planned peak, share of the band
+  double backoff_fraction = safety_defaults::kBackoffFraction;  // scale 0 at this share
+  double clamp_pct = safety_defaults::kClampPct;          // |bias| never exceeds this (% of rated)
+  double ramp_pct_per_s = safety_defaults::kRampPctPerS;  // bias ramp at start-up and ramp-down
   // Bias acknowledgement (DESIGN.md section 8, layer 0).
-  double activation_timeout_s = 2.0;  // governor must report "bias active" within this
-  double echo_tolerance_pct = 0.02;   // |echo - command| allowed, plus 10 % of |command|
-  double echo_delay_s = 0.05;         // the echo may lag the command this long
-  double echo_max_bad_s = 0.05;       // a mismatch lasting longer than this trips
+  double activation_timeout_s = safety_defaults::kActivationTimeoutS;  // "bias active" within
+  double echo_tolerance_pct = safety_defaults::kEchoTolerancePct;      // plus 10 % of |command|
+  double echo_delay_s = safety_defaults::kEchoDelayS;     // the echo may lag the command this long
+  double echo_max_bad_s = safety_defaults::kEchoMaxBadS;  // a longer mismatch trips
 };
 
 struct SteadyStateSettings {
@@ -72,7 +72,9 @@ struct ExcitationSettings {
   int prbs_clock_divider = 2;
 };
 
-struct MmfmSettings {
+// The [mmfm] table: the online MMFM of a test (the estimator's modulating-function settings
+// are rig::ident::MmfmSettings).
+struct MmfmTestSettings {
   int order_n = 2;                       // denominator order
   int order_m = 0;                       // numerator order
   std::optional<double> delay_s;         // nullopt: estimated
@@ -126,7 +128,7 @@ struct TestConfig {
   SteadyStateSettings steady_state;
   PilotSettings pilot;
   ExcitationSettings excitation;
-  MmfmSettings mmfm;
+  MmfmTestSettings mmfm;
   SweepSettings sweep;
   CompareSettings compare;
   OutputSettings output;

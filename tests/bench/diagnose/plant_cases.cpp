@@ -63,11 +63,13 @@ double linearised_zeta(const std::vector<std::string>& faults) {
   return plantsim::linearise(p, "stornoway").zeta;
 }
 
-ident::TransferFunction nominal_tf() {
+model::TransferFunction nominal_tf() {
   const plantsim::LinearModel lm = plantsim::linearise(plantsim::PlantOptions{});
   // The rig holds each setpoint for a sample (zero-order hold); the first-order-hold
   // simulation of the model sees that as half a sample of dead time.
-  return ident::TransferFunction{lm.num, lm.den, lm.delay_s + 0.5 * kDt};
+  model::TransferFunction tf = lm.tf;
+  tf.delay_s += 0.5 * kDt;
+  return tf;
 }
 
 }  // namespace

@@ -7,15 +7,15 @@
 #include <iterator>
 #include <string>
 
-#include "rig/io/model_file.hpp"
 #include "rig/io/sidecar.hpp"
+#include "rig/model/model_file.hpp"
 
 namespace rig::diagnose::bench {
 
 void write_diagnose_recording(const std::filesystem::path& dir, const Eigen::VectorXd& u,
                               const Eigen::VectorXd& y, double dt_s, std::uint64_t seed,
                               std::optional<double> output_rc_s,
-                              const ident::TransferFunction* model) {
+                              const model::TransferFunction* model) {
   std::filesystem::create_directories(dir);
   std::ofstream csv(dir / "rec.csv");
   csv.precision(12);
@@ -29,12 +29,12 @@ void write_diagnose_recording(const std::filesystem::path& dir, const Eigen::Vec
   if (output_rc_s) sc.coupling_rc_s = *output_rc_s, sc.coupled_columns = {"y"};
   io::write_sidecar(dir / "rec.json", sc);
   if (!model) return;
-  io::ModelFile m;
+  model::ModelFile m;
   m.tf = *model;
   m.input = std::string("u");  // (a literal assignment trips GCC 12 -Wrestrict here)
   m.output = std::string("y");
   m.units = {{"input", "% of rated power"}, {"output", "kW"}};
-  io::write_model(dir / "model.json", m);
+  model::write_model(dir / "model.json", m);
 }
 
 void print_hypotheses(const DiagnoseResult& r) {

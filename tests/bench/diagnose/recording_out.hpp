@@ -16,7 +16,7 @@ namespace rig::diagnose::bench {
 void write_diagnose_recording(const std::filesystem::path& dir, const Eigen::VectorXd& u,
                               const Eigen::VectorXd& y, double dt_s, std::uint64_t seed,
                               std::optional<double> output_rc_s,
-                              const ident::TransferFunction* model);
+                              const model::TransferFunction* model);
 
 // The explanation and the four best hypotheses with their parameters and fits.
 void print_hypotheses(const DiagnoseResult& result);

@@ -6,7 +6,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "rig/ident/transfer_function.hpp"
+#include "rig/model/transfer_function.hpp"
 #include "rig/signal/excitation.hpp"
 #include "rig/signal/random.hpp"
 
@@ -19,8 +19,8 @@ struct Record {
 };
 
 // H(s) = e^{-0.06 s} / (0.07 s^2 + 0.19 s + 11.05) (MMFM.md section 1).
-inline TransferFunction stornoway_tf() {
-  TransferFunction tf;
+inline model::TransferFunction stornoway_tf() {
+  model::TransferFunction tf;
   tf.num = Eigen::VectorXd::Ones(1);
   tf.den = Eigen::Vector3d(0.07, 0.19, 11.05);
   tf.delay_s = 0.06;
@@ -28,8 +28,8 @@ inline TransferFunction stornoway_tf() {
 }
 
 // (-6400 s + 1600) / (s^4 + 5 s^3 + 408 s^2 + 416 s + 1600).
-inline TransferFunction rao_garnier_tf() {
-  TransferFunction tf;
+inline model::TransferFunction rao_garnier_tf() {
+  model::TransferFunction tf;
   tf.num = Eigen::Vector2d(-6400.0, 1600.0);
   tf.den.resize(5);
   tf.den << 1.0, 5.0, 408.0, 416.0, 1600.0;
@@ -37,7 +37,7 @@ inline TransferFunction rao_garnier_tf() {
 }
 
 // Adds white Gaussian noise of variance var(y0) / 10^(snr_db / 10).
-inline Record with_noise(const TransferFunction& tf, Eigen::VectorXd u, double dt_s,
+inline Record with_noise(const model::TransferFunction& tf, Eigen::VectorXd u, double dt_s,
                          double snr_db, std::uint64_t seed) {
   Record r;
   r.dt_s = dt_s;

@@ -51,13 +51,13 @@ BENCHMARK(BM_IdentifyHourAutoOrder)->Unit(benchmark::kSecond)->UseRealTime()->It
 // Order given (n = 2, m = 0): correlation, delay search, MMFM and block standard errors only.
 void BM_IdentifyHourOrder2(benchmark::State& state) {
   IdentifyOptions io;
-  io.order = ModelOrder{2, 0};
+  io.order = model::ModelOrder{2, 0};
   time_identify(state, io);
 }
 BENCHMARK(BM_IdentifyHourOrder2)->Unit(benchmark::kSecond)->UseRealTime()->Iterations(2);
 
 void BM_LsimHourReference(benchmark::State& state) {
-  const TransferFunction tf = experiments::stornoway_tf();
+  const model::TransferFunction tf = experiments::stornoway_tf();
   const experiments::Record& rec = hour();
   for (auto _ : state) benchmark::DoNotOptimize(simulate(tf, rec.u, rec.dt_s));
   report(state, nullptr);

@@ -57,7 +57,7 @@ void run_series(Series& s, const char* label, int r, const std::function<void(Se
 }  // namespace
 
 void stornoway_mc(const McConfig& cfg) {
-  const TransferFunction tf = experiments::stornoway_tf();
+  const model::TransferFunction tf = experiments::stornoway_tf();
   const DerivedFigures truth = derived_figures(tf, Eigen::MatrixXd());
   std::printf("\n== Stornoway-like loop e^{-0.06s}/(0.07s^2+0.19s+11.05): Gaussian 4 Hz, "
               "100 Hz, SNR 0 dB, %.1f min, %d runs, seed %llu (run r: seed+r), lags %d ==\n",
@@ -67,7 +67,7 @@ void stornoway_mc(const McConfig& cfg) {
   for (int r = 0; r < cfg.runs; ++r) {
     const auto rec = experiments::stornoway_record(cfg.seed + r, cfg.minutes);
     IdentifyOptions io;
-    io.order = ModelOrder{2, 0};
+    io.order = model::ModelOrder{2, 0};
     io.correlator.lags = cfg.lags;
     run_series(mm, "MMFM", r, [&](Series& s) {
       const IdentifyResult res = identify(rec.u, rec.y, rec.dt_s, io);
@@ -123,7 +123,7 @@ void stornoway_mc(const McConfig& cfg) {
 }
 
 void rao_garnier_mc(const McConfig& cfg) {
-  const TransferFunction tf = experiments::rao_garnier_tf();
+  const model::TransferFunction tf = experiments::rao_garnier_tf();
   const Eigen::Index samples = 2 * 2047 * 3;
   std::printf("\n== Rao-Garnier (-6400s+1600)/(s^4+5s^3+408s^2+416s+1600): PRBS 11 bit x3, "
               "Ts 0.01 s, %lld samples, SNR 10 dB, %d runs, seed %llu (run r: seed+r), "
@@ -135,14 +135,14 @@ void rao_garnier_mc(const McConfig& cfg) {
   for (auto& e : est) e.resize(6);
   Eigen::VectorXd crlb_var = Eigen::VectorXd::Zero(6);
   int fails[3] = {0, 0, 0};
-  auto keep = [&](int k, const TransferFunction& model) {
-    const Eigen::VectorXd th = pack_parameters(monic(model));
+  auto keep = [&](int k, const model::TransferFunction& model) {
+    const Eigen::VectorXd th = pack_parameters(model::monic(model));
     for (int i = 0; i < 6; ++i) est[k][i].push_back(th(i + 1));
   };
   for (int r = 0; r < cfg.runs; ++r) {
     const auto rec = experiments::rao_garnier_record(cfg.seed + r, samples);
     IdentifyOptions io;
-    io.order = ModelOrder{4, 1};
+    io.order = model::ModelOrder{4, 1};
     io.delay_s = 0.0;
     io.correlator.lags = 2048;
     io.correlator.zero_index = 400;

@@ -51,9 +51,9 @@ struct SkipSetup {
   Eigen::Index block_samples() const { return products + lags - 1; }
 };
 
-inline TransferFunction skip_plant_tf(const SkipSetup& s) {
+inline model::TransferFunction skip_plant_tf(const SkipSetup& s) {
   const double wn = 2.0 * M_PI * s.fn_hz;
-  TransferFunction tf;
+  model::TransferFunction tf;
   tf.num = Eigen::VectorXd::Constant(1, s.gain * wn * wn);
   tf.den = Eigen::Vector3d(1.0, 2.0 * s.zeta * wn, wn * wn);
   return tf;

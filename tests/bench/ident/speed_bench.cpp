@@ -32,7 +32,7 @@ void BM_MmfmSolve8Functions(benchmark::State& state) {
 BENCHMARK(BM_MmfmSolve8Functions);
 
 void BM_LsimReference256(benchmark::State& state) {
-  const TransferFunction tf = testing::make_tf({1.0}, {0.07, 0.19, 11.05}, 0.06);
+  const model::TransferFunction tf = testing::make_tf({1.0}, {0.07, 0.19, 11.05}, 0.06);
   for (auto _ : state) benchmark::DoNotOptimize(simulate(tf, pair().ruu.r, 0.01));
 }
 BENCHMARK(BM_LsimReference256);

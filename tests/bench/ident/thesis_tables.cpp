@@ -24,14 +24,14 @@ Eigen::VectorXd times_dominant_pair(const Eigen::VectorXd& other) {
 }
 
 void print_fit(const char* label, const MmfmResult& r) {
-  const TransferFunction m = monic(r.model);
+  const model::TransferFunction m = model::monic(r.model);
   std::printf("  %-14s a1 %8.4f  a0 %8.4f  b0 %8.4f | fn %6.4f Hz zeta %6.4f gain %6.4f "
               "| Td %6.4f s | corr fit %6.2f %%\n",
               label, m.den(1), m.den(2), m.num(m.num.size() - 1), r.derived.fn_hz,
               r.derived.zeta, r.derived.gain, r.delay_s, r.correlation_fit_pct);
 }
 
-void fit_second_order(const char* label, const TransferFunction& plant) {
+void fit_second_order(const char* label, const model::TransferFunction& plant) {
   const auto p = triangle_pair(plant, 0.05, 0.01, 1000, 400);
   MmfmOptions opt;
   opt.order = {2, 0};
@@ -49,8 +49,8 @@ void fit_second_order(const char* label, const TransferFunction& plant) {
 void noise_free_table() {
   struct Row {
     const char* name;
-    TransferFunction tf;
-    ModelOrder order;
+    model::TransferFunction tf;
+    model::ModelOrder order;
   };
   const std::vector<Row> rows = {
       {"1/0 4/(s+2)", make_tf({4.0}, {1.0, 2.0}), {1, 0}},
@@ -91,14 +91,16 @@ void zero_shift_table() {
     const auto zi = static_cast<Eigen::Index>(frac * 400);
     double errs[2] = {0, 0}, scale = 0;
     int k = 0;
-    for (const TransferFunction& tf : {make_tf({4.0}, {1.0, 2.0}), make_tf({10.0}, {1.0, 2.0, 10.0})}) {
+    for (const model::TransferFunction& tf :
+         {make_tf({4.0}, {1.0, 2.0}), make_tf({10.0}, {1.0, 2.0, 10.0})}) {
       const auto p = triangle_pair(tf, 0.1, 0.02, 400, zi);
       MmfmOptions opt;
       opt.order = {tf.order(), 0};
       opt.delay_s = 0.0;
       try {
         const MmfmResult r = estimate_mmfm(p.ruu, p.ryu, opt);
-        const Eigen::VectorXd got = pack_parameters(monic(r.model)), want = pack_parameters(monic(tf));
+        const Eigen::VectorXd got = pack_parameters(monic(r.model)),
+                              want = pack_parameters(model::monic(tf));
         errs[k] = (got - want).cwiseQuotient(want).cwiseAbs().maxCoeff();
         scale = r.settings.scale_s;
       } catch (const std::exception&) {
@@ -116,8 +118,8 @@ void thesis_513_table() {
               std::sqrt(10.0) / (2 * M_PI), 1.0 / std::sqrt(10.0));
   std::printf(" third order, real pole at -p:\n");
   for (double p : {20.0, 10.0, 5.0, 3.0, 2.0, 1.0}) {
-    const TransferFunction plant{Eigen::VectorXd::Constant(1, 10.0 * p),
-                                 times_dominant_pair(Eigen::Vector2d(1.0, p)), 0.0};
+    const model::TransferFunction plant{Eigen::VectorXd::Constant(1, 10.0 * p),
+                                        times_dominant_pair(Eigen::Vector2d(1.0, p)), 0.0};
     char label[32];
     std::snprintf(label, sizeof label, "p=%g", p);
     fit_second_order(label, plant);
@@ -126,8 +128,9 @@ void thesis_513_table() {
   const double pairs[][2] = {{20, 20}, {10, 10}, {5, 5}, {3, 6}, {2, 2}};
   for (const auto& ab : pairs) {
     const double a = ab[0], b = ab[1], w2 = a * a + b * b;
-    const TransferFunction plant{Eigen::VectorXd::Constant(1, 10.0 * w2),
-                                 times_dominant_pair(Eigen::Vector3d(1.0, 2.0 * a, w2)), 0.0};
+    const model::TransferFunction plant{Eigen::VectorXd::Constant(1, 10.0 * w2),
+                                        times_dominant_pair(Eigen::Vector3d(1.0, 2.0 * a, w2)),
+                                        0.0};
     char label[32];
     std::snprintf(label, sizeof label, "-%g+-%gj", a, b);
     fit_second_order(label, plant);

@@ -15,11 +15,11 @@
 #include <ctime>
 #include <numbers>
 #include <random>
-#include <unsupported/Eigen/MatrixFunctions>
 
 #include "plantsim/plant/config.hpp"
 #include "plantsim/plant/genset_plant.hpp"
 #include "plantsim/plant/linearise.hpp"
+#include "rig/model/transfer_function.hpp"
 
 namespace plantsim {
 namespace {
@@ -78,27 +78,11 @@ double run_plant(const Params& p, const std::vector<double>& u) {
   return sum;
 }
 
-// Linear reference: companion form of num/den discretised by ZOH, input delayed by whole
-// ticks (the reference only needs the cost, not sub-tick delay accuracy).
+// Linear reference: rig_model's exact simulation of the plant's linearised TF (the one
+// transfer-function simulation of the project).
 double run_linear(const LinearModel& lm, const std::vector<double>& u) {
-  const Eigen::Index n = lm.den.size() - 1;
-  Eigen::MatrixXd aug = Eigen::MatrixXd::Zero(n + 1, n + 1);
-  for (Eigen::Index i = 0; i < n; ++i) aug(0, i) = -lm.den[i + 1];
-  for (Eigen::Index i = 1; i < n; ++i) aug(i, i - 1) = 1.0;
-  aug(0, n) = 1.0;
-  const Eigen::MatrixXd phi = (aug * kDt).exp();
-  const Eigen::MatrixXd ad = phi.topLeftCorner(n, n);
-  const Eigen::VectorXd bd = phi.topRightCorner(n, 1);
-  Eigen::RowVectorXd c = Eigen::RowVectorXd::Zero(n);
-  for (Eigen::Index k = 0; k < lm.num.size(); ++k) c[n - lm.num.size() + k] = lm.num[k];
-  const auto delay = static_cast<std::size_t>(std::lround(lm.delay_s / kDt));
-  Eigen::VectorXd x = Eigen::VectorXd::Zero(n);
-  double sum = 0.0;
-  for (std::size_t k = 0; k < u.size(); ++k) {
-    x = ad * x + bd * (k >= delay ? u[k - delay] : 0.0);
-    sum += c * x;
-  }
-  return sum;
+  const Eigen::Map<const Eigen::VectorXd> in(u.data(), static_cast<Eigen::Index>(u.size()));
+  return rig::model::simulate(lm.tf, in, kDt).sum();
 }
 
 Params quiet(Params p) {

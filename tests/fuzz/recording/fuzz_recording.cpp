@@ -15,9 +15,9 @@
 #include <string>
 #include <string_view>
 
-#include "rig/io/model_file.hpp"
 #include "rig/io/recording.hpp"
 #include "rig/io/sidecar.hpp"
+#include "rig/model/model_file.hpp"
 
 namespace {
 
@@ -106,9 +106,9 @@ void parse_json_documents(std::string_view text) {
   } catch (const rig::io::InputError&) {
   }
   try {
-    const rig::io::ModelFile m = rig::io::model_from_json(doc, "fuzz.json");
+    const rig::model::ModelFile m = rig::model::model_from_json(doc, "fuzz.json");
     require(m.tf.den.size() > 0 && m.tf.den[0] != 0.0 && m.tf.delay_s >= 0.0);
-    rig::io::model_to_json(m);  // a model that was accepted must be writable
+    rig::model::model_to_json(m);  // a model that was accepted must be writable
   } catch (const rig::io::InputError&) {
   }
 }

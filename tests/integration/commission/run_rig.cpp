@@ -8,7 +8,7 @@
 #include <fstream>
 #include <sstream>
 
-#include "rig/io/model_file.hpp"
+#include "rig/model/model_file.hpp"
 
 namespace rig::testing {
 
@@ -49,8 +49,8 @@ nlohmann::json read_json(const std::filesystem::path& path) {
 }
 
 TruthError error_against_truth(const std::filesystem::path& model_json) {
-  const auto model = io::read_model(model_json).tf;
-  const auto truth = io::read_model(source_dir() / "plantsim/presets/stornoway.tf.json").tf;
+  const auto model = model::read_model(model_json).tf;
+  const auto truth = model::read_model(source_dir() / "plantsim/presets/stornoway.tf.json").tf;
   TruthError e;
   for (int i = 0; i < 40; ++i) {
     const double f = 0.5 * std::pow(10.0, i / 39.0);  // 0.5 .. 5 Hz

@@ -12,7 +12,7 @@
 #include "rig/cli/commands.hpp"
 #include "rig/cli/diagnose.hpp"
 #include "rig/diagnose/concealed.hpp"
-#include "rig/io/model_file.hpp"
+#include "rig/model/model_file.hpp"
 
 namespace fs = std::filesystem;
 
@@ -35,10 +35,10 @@ class DiagnoseCli : public ::testing::Test {
       csv << static_cast<double>(k) * rec.input.dt_s << ',' << rec.input.u(k) << ','
           << rec.input.y(k) << '\n';
     if (!sidecar.empty()) std::ofstream(dir_ / "rec.json") << sidecar;
-    rig::io::ModelFile m;
+    rig::model::ModelFile m;
     m.tf = rec.input.model;
     m.units = {{"input", "% of rated power"}, {"output", "kW"}};
-    rig::io::write_model(dir_ / "model.json", m);
+    rig::model::write_model(dir_ / "model.json", m);
   }
 
   int run(std::vector<std::string> args) {
@@ -75,7 +75,7 @@ TEST_F(DiagnoseCli, WritesReportsAndTheAugmentedModel) {
   const nlohmann::json j = nlohmann::json::parse(in);
   EXPECT_EQ(j["verdict"], "dead_time");
   EXPECT_TRUE(fs::exists(dir_ / "out" / "report.html"));
-  const auto aug = rig::io::read_model(dir_ / "out" / "augmented_model.json");
+  const auto aug = rig::model::read_model(dir_ / "out" / "augmented_model.json");
   EXPECT_NEAR(aug.tf.delay_s, 0.10, 0.02);
 }
 

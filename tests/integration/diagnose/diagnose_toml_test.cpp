@@ -205,7 +205,7 @@ rig::cli::PlantMapping map(std::vector<rig::diagnose::AppliedEffect> effects,
   h.effects = std::move(effects);
   h.derived = std::move(derived);
   const double w = 2.0 * 3.141592653589793 * 2.0;  // a 2 Hz mode with zeta 0.1
-  const rig::ident::TransferFunction tf{Eigen::VectorXd::Constant(1, w * w),
+  const rig::model::TransferFunction tf{Eigen::VectorXd::Constant(1, w * w),
                                         Eigen::Vector3d(1.0, 2.0 * 0.1 * w, w * w), 0.06};
   const Eigen::VectorXd u = Eigen::VectorXd::LinSpaced(101, -2.0, 4.0);  // mean 1 %
   return rig::cli::plant_changes(h, stornoway_model(), tf, u);

@@ -12,7 +12,7 @@
 
 #include "plant_cases.hpp"
 #include "rig/diagnose/diagnose.hpp"
-#include "rig/io/model_file.hpp"
+#include "rig/model/model_file.hpp"
 
 namespace {
 
@@ -20,7 +20,7 @@ rig::diagnose::DiagnoseResult diagnose_plant(const std::vector<std::string>& fau
                                              std::uint64_t seed) {
   const char* src = std::getenv("RIG_SOURCE_DIR");
   const std::filesystem::path root = src ? src : ".";
-  auto model = rig::io::read_model(root / "plantsim/presets/stornoway.tf.json");
+  auto model = rig::model::read_model(root / "plantsim/presets/stornoway.tf.json");
   // The plant holds each bias for a tick (zero-order hold), which the first-order-hold
   // simulation sees as half a sample of extra dead time: part of the known recording chain.
   model.tf.delay_s += 0.005;

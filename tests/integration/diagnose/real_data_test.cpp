@@ -65,7 +65,7 @@ rig::ident::IdentifyResult fit_linear(const Series& s) {
   return rig::ident::identify(s.u, s.y, s.dt_s, io);
 }
 
-dg::DiagnoseResult run_diagnosis(const rig::ident::TransferFunction& model, const Series& s,
+dg::DiagnoseResult run_diagnosis(const rig::model::TransferFunction& model, const Series& s,
                                  const dg::DiagnoseOptions& options = {}) {
   return dg::diagnose({model, s.u, s.y, s.dt_s, std::nullopt}, options);
 }
@@ -171,7 +171,7 @@ TEST(RealData, EmpsCoulombFrictionOnReferenceRigidBody) {
   if (!root) GTEST_SKIP() << "RIG_SHARED_DIR/data not available";
   constexpr double kMass_kg = 95.1089, kViscous_ns_m = 203.5034, kCoulomb_n = 20.3935;
   constexpr double kGtau_n_v = 35.1507, kLeak_rad_s = 0.05;
-  rig::ident::TransferFunction model;
+  rig::model::TransferFunction model;
   model.num = Eigen::VectorXd::Constant(1, kGtau_n_v / kMass_kg);
   model.den = Eigen::Vector3d(1.0, kViscous_ns_m / kMass_kg + kLeak_rad_s,
                               kLeak_rad_s * kViscous_ns_m / kMass_kg);

@@ -1,14 +1,14 @@
 // `rig identify` end to end: a recording of a known second-order plant with dead time,
 // written by the session recorder, identified by the real executable.
+#include <gtest/gtest.h>
+
 #include <cmath>
+#include <nlohmann/json.hpp>
 #include <random>
 
-#include <gtest/gtest.h>
-#include <nlohmann/json.hpp>
-
 #include "cli_runner.hpp"
-#include "rig/ident/transfer_function.hpp"
 #include "rig/io/recording_writer.hpp"
+#include "rig/model/transfer_function.hpp"
 #include "rig/signal/ac_coupling.hpp"
 #include "rig/signal/excitation.hpp"
 
@@ -23,8 +23,8 @@ constexpr std::uint64_t kSeed = 4242;
 
 // Stornoway-like power loop (MMFM.md section 1): 1 / (0.07 s^2 + 0.19 s + 11.05), Td 0.1 s.
 // gain 1/11.05 = 0.0905, fn = sqrt(11.05/0.07)/(2 pi) = 2.00 Hz, zeta = 0.108.
-ident::TransferFunction plant() {
-  ident::TransferFunction tf;
+model::TransferFunction plant() {
+  model::TransferFunction tf;
   tf.num = Eigen::VectorXd::Constant(1, 1.0);
   tf.den = (Eigen::VectorXd(3) << 0.07, 0.19, 11.05).finished();
   tf.delay_s = 0.1;
@@ -39,7 +39,7 @@ std::filesystem::path write_plant_recording(const std::filesystem::path& dir, Ei
   g.bandwidth_hz = 4.0;
   g.seed = kSeed;
   const Eigen::VectorXd u = signal::gaussian_excitation(g);
-  Eigen::VectorXd y = ident::simulate(plant(), u, kDt);
+  Eigen::VectorXd y = model::simulate(plant(), u, kDt);
   std::mt19937_64 rng(kSeed + 1);
   std::normal_distribution<double> noise(0.0, 0.05 * std::sqrt(y.squaredNorm() / double(n)));
   io::Sidecar meta;
@@ -115,7 +115,7 @@ TEST(IdentifyCli, MismatchedCouplingNetworksFailTheDataQualityChecks) {
   g.bandwidth_hz = 4.0;
   g.seed = kSeed;
   const Eigen::VectorXd u = signal::gaussian_excitation(g);
-  const Eigen::VectorXd y = ident::simulate(plant(), u, kDt);
+  const Eigen::VectorXd y = model::simulate(plant(), u, kDt);
   const Eigen::VectorXd u_ac = signal::ac_couple(u, kDt, 1.59);
   const Eigen::VectorXd y_ac = signal::ac_couple(y, kDt, 0.8);
   io::Sidecar meta;

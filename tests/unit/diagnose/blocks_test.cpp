@@ -54,11 +54,11 @@ TEST(Blocks, PolyFromRootsRebuildsAQuadratic) {
 }
 
 TEST(Blocks, FeedbackSimulationWithoutFeedbackMatchesExactSimulation) {
-  const ident::TransferFunction tf = nominal_genset_model();
+  const model::TransferFunction tf = nominal_genset_model();
   signal::GaussianOptions go;
   go.n = 6000, go.dt_s = 0.01, go.bandwidth_hz = 4.0, go.seed = 3;
   const Eigen::VectorXd u = signal::gaussian_excitation(go);
-  const Eigen::VectorXd exact = ident::simulate(tf, u, 0.01);
+  const Eigen::VectorXd exact = model::simulate(tf, u, 0.01);
   const Eigen::VectorXd loop =
       simulate_with_feedback(tf, u, 0.01, [](double, double) { return 0.0; });
   // Mid-sample zero-order hold versus first-order hold: second order in dt.
@@ -66,7 +66,7 @@ TEST(Blocks, FeedbackSimulationWithoutFeedbackMatchesExactSimulation) {
 }
 
 TEST(Blocks, CubicFeedbackStiffensTheResponse) {
-  ident::TransferFunction tf{v({1.0}), v({1.0, 0.5, 1.0}), 0.0};  // unit static gain
+  model::TransferFunction tf{v({1.0}), v({1.0, 0.5, 1.0}), 0.0};  // unit static gain
   const Eigen::VectorXd u = Eigen::VectorXd::Constant(8000, 2.0);
   // Static equilibrium z = u - k3 z^3 with k3 = 0.25: z^3/4 + z - 2 = 0, solved by Newton.
   double zs = 1.0;

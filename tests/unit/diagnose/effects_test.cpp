@@ -10,7 +10,7 @@ namespace rig::diagnose {
 namespace {
 
 std::complex<double> ratio(Effect e, std::vector<double> p, double f_hz) {
-  const ident::TransferFunction g = nominal_genset_model();
+  const model::TransferFunction g = nominal_genset_model();
   const AppliedEffect a{e, std::move(p)};
   return augmented_tf(g, std::span<const AppliedEffect>(&a, 1)).response(f_hz) / g.response(f_hz);
 }
@@ -50,7 +50,7 @@ TEST(Effects, AcCouplingIsAHighPass) {
 }
 
 TEST(Effects, LoadDampingChangesOnlyTheModesDamping) {
-  const ident::TransferFunction g = nominal_genset_model();
+  const model::TransferFunction g = nominal_genset_model();
   const AppliedEffect a{Effect::kLoadDamping, {0.25}};
   const auto t = augmented_tf(g, std::span<const AppliedEffect>(&a, 1));
   const auto mode = dominant_mode(t);

@@ -5,7 +5,7 @@
 
 #include "rig/diagnose/concealed.hpp"
 #include "rig/diagnose/report_out.hpp"
-#include "rig/io/model_file.hpp"
+#include "rig/model/model_file.hpp"
 
 namespace rig::diagnose {
 namespace {
@@ -28,13 +28,13 @@ TEST(Report, JsonHasTheDocumentedKeysAndTheModelRoundTrips) {
     EXPECT_TRUE(j["hypotheses"][0].contains(key)) << key;
   EXPECT_EQ(j["verdict"], "dead_time");
 
-  io::ModelFile base;
+  model::ModelFile base;
   base.tf = rec.input.model;
-  const io::ModelFile aug = augmented_model(r, base);
+  const model::ModelFile aug = augmented_model(r, base);
   const auto dir = std::filesystem::temp_directory_path() / "rig_diagnose_report_test";
   std::filesystem::create_directories(dir);
-  io::write_model(dir / "augmented.json", aug);
-  const io::ModelFile back = io::read_model(dir / "augmented.json");
+  model::write_model(dir / "augmented.json", aug);
+  const model::ModelFile back = model::read_model(dir / "augmented.json");
   EXPECT_NEAR(back.tf.delay_s, 0.10, 0.02);  // 60 ms nominal + 40 ms found
   EXPECT_EQ(back.extra["augmentation"][0]["effect"], "dead_time");
 

@@ -8,14 +8,14 @@ namespace rig::fra {
 namespace {
 
 // Measured points equal to the model on 0.2-10 Hz, coherence 1.
-std::vector<FrfPoint> exact_points(const testing::SecondOrderDelay& g) {
-  std::vector<FrfPoint> pts;
+std::vector<model::FrfPoint> exact_points(const testing::SecondOrderDelay& g) {
+  std::vector<model::FrfPoint> pts;
   for (double f : {0.2, 0.5, 1.0, 1.5, 2.0, 3.0, 5.0, 8.0}) {
     const std::complex<double> h = g.response(f);
-    FrfPoint p;
+    model::FrfPoint p;
     p.freq_hz = f;
     p.mag = std::abs(h);
-    p.phase_deg = wrap_deg(std::arg(h) * 180.0 / std::numbers::pi);
+    p.phase_deg = model::wrap_deg(std::arg(h) * 180.0 / std::numbers::pi);
     p.coherence = 1.0;
     pts.push_back(p);
   }
@@ -53,7 +53,7 @@ TEST(Compare, MagnitudeAndPhaseTolerances) {
   const testing::SecondOrderDelay g;
   auto pts = exact_points(g);
   pts[4].mag *= std::pow(10.0, 0.9 / 20.0);  // +0.9 dB at 2 Hz: inside +-1 dB
-  pts[5].phase_deg = wrap_deg(pts[5].phase_deg - 4.9);
+  pts[5].phase_deg = model::wrap_deg(pts[5].phase_deg - 4.9);
   CompareResult r = compare(g, pts);
   EXPECT_EQ(r.verdict, Verdict::kPass) << r.summary;
   EXPECT_NEAR(r.rows[4].mag_error_db, 0.9, 1e-9);
@@ -76,7 +76,7 @@ TEST(Compare, PhaseErrorIsWrapped) {
   const ResponseFn model = [](double) {
     return std::polar(1.0, -179.0 * std::numbers::pi / 180.0);
   };
-  std::vector<FrfPoint> pts;
+  std::vector<model::FrfPoint> pts;
   for (double f : {1.0, 2.0, 3.0}) pts.push_back({f, 1.0, 178.0, 1.0});
   pts[1].phase_deg = 178.0 - 720.0;  // unwrapped measurement, two turns down
   const CompareResult r = compare(model, pts);

@@ -43,7 +43,7 @@ TEST(H1, RecoversKnownSystemWhereCoherenceIsHighAndFlagsNoise) {
   EXPECT_LT(cmp.max_abs_mag_error_db, 0.5) << cmp.summary;
   double coh_low = 0.0, coh_high = 0.0;
   int n_low = 0, n_high = 0;
-  for (const FrfPoint& p : frf) {
+  for (const model::FrfPoint& p : frf) {
     if (p.freq_hz >= 0.5 && p.freq_hz <= 5.0) {
       coh_low += p.coherence;
       ++n_low;

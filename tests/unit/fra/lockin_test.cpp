@@ -48,8 +48,9 @@ TEST(LockIn, MatchesAnalyticSecondOrderWithDelay) {
     const Record r = sine_record(g, f, 10.0, std::max(10, static_cast<int>(5 * f)), 0.01, seed++);
     const LockInPoint p = lock_in(r.u, r.y, f, kDt, r.t0_s);
     const std::complex<double> h = g.response(f);
-    EXPECT_NEAR(to_db(std::abs(p.ratio)), to_db(std::abs(h)), 0.05);
-    EXPECT_NEAR(wrap_deg((std::arg(p.ratio) - std::arg(h)) * 180.0 / std::numbers::pi), 0.0, 0.3);
+    EXPECT_NEAR(model::to_db(std::abs(p.ratio)), model::to_db(std::abs(h)), 0.05);
+    EXPECT_NEAR(model::wrap_deg((std::arg(p.ratio) - std::arg(h)) * 180.0 / std::numbers::pi), 0.0,
+                0.3);
     EXPECT_GT(p.coherence, 0.999);
     EXPECT_LT(p.y.distortion(), 1e-4);
   }
@@ -71,7 +72,7 @@ TEST(LockIn, DistortionFigureDetectsAddedHarmonic) {
   EXPECT_NEAR(dirty.y.distortion(), 2.5e-3, 0.25e-3);
   EXPECT_NEAR(std::abs(dirty.y.harmonics[1]), 0.05 * y1, 0.005 * y1);
   // The harmonic does not leak into the fundamental.
-  EXPECT_NEAR(to_db(std::abs(dirty.ratio)), to_db(std::abs(clean.ratio)), 0.01);
+  EXPECT_NEAR(model::to_db(std::abs(dirty.ratio)), model::to_db(std::abs(clean.ratio)), 0.01);
   // Noise figure: residual variance / fundamental power = 0.01^2 / 0.5.
   EXPECT_NEAR(clean.y.noise_ratio(), 2e-4, 0.3e-4);
 }

@@ -118,10 +118,10 @@ TEST(SteppedSine, StreamingSweepRecoversDiscretePlantResponse) {
     SCOPED_TRACE("f = " + std::to_string(r.point.freq_hz));
     const std::complex<double> h = plant.response(r.point.freq_hz);
     EXPECT_TRUE(r.good);
-    EXPECT_NEAR(to_db(r.mag), to_db(std::abs(h)), 0.05);
-    EXPECT_NEAR(wrap_deg(r.phase_deg - std::arg(h) * 180.0 / std::numbers::pi), 0.0, 0.3);
+    EXPECT_NEAR(model::to_db(r.mag), model::to_db(std::abs(h)), 0.05);
+    EXPECT_NEAR(model::wrap_deg(r.phase_deg - std::arg(h) * 180.0 / std::numbers::pi), 0.0, 0.3);
     EXPECT_LT(r.distortion, 1e-3);
-    const FrfPoint p = r.frf_point();
+    const model::FrfPoint p = r.frf_point();
     EXPECT_LE(p.mag_lo, p.mag);
     EXPECT_GE(p.mag_hi, p.mag);
   }

@@ -7,7 +7,7 @@
 #include <algorithm>
 #include <cmath>
 
-#include "rig/ident/transfer_function.hpp"
+#include "rig/model/transfer_function.hpp"
 #include "rig/signal/correlation.hpp"
 
 namespace rig::ident::testing {
@@ -16,7 +16,7 @@ struct CorrelationPair {
   signal::Correlation ruu, ryu;
 };
 
-inline CorrelationPair triangle_pair(const TransferFunction& tf, double half_width_s,
+inline CorrelationPair triangle_pair(const model::TransferFunction& tf, double half_width_s,
                                      double dt_s, Eigen::Index lags, Eigen::Index zero_index) {
   CorrelationPair p;
   p.ruu.dt_s = dt_s;
@@ -29,9 +29,9 @@ inline CorrelationPair triangle_pair(const TransferFunction& tf, double half_wid
   return p;
 }
 
-inline TransferFunction make_tf(std::initializer_list<double> num,
-                                std::initializer_list<double> den, double delay_s = 0.0) {
-  TransferFunction tf;
+inline model::TransferFunction make_tf(std::initializer_list<double> num,
+                                       std::initializer_list<double> den, double delay_s = 0.0) {
+  model::TransferFunction tf;
   tf.num = Eigen::Map<const Eigen::VectorXd>(num.begin(), static_cast<Eigen::Index>(num.size()));
   tf.den = Eigen::Map<const Eigen::VectorXd>(den.begin(), static_cast<Eigen::Index>(den.size()));
   tf.delay_s = delay_s;

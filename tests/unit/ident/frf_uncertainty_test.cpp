@@ -22,9 +22,9 @@ namespace {
 constexpr double kDt = 0.01;
 constexpr double kPi = 3.14159265358979323846;
 
-TransferFunction sopdt() {
+model::TransferFunction sopdt() {
   const double wn = 2.0 * kPi * 2.03, zeta = 0.10, gain = 46.0;
-  TransferFunction tf;
+  model::TransferFunction tf;
   tf.num = Eigen::VectorXd::Constant(1, gain * wn * wn);
   tf.den = Eigen::Vector3d(1.0, 2.0 * zeta * wn, wn * wn);
   tf.delay_s = 0.078;
@@ -40,7 +40,7 @@ signal::CorrelatorOptions window(Eigen::Index lags, Eigen::Index zero) {
 }
 
 struct McRun {
-  TransferFunction model;
+  model::TransferFunction model;
   std::vector<FrfUncertainty> band;
 };
 
@@ -54,7 +54,7 @@ McRun one_run(std::uint64_t seed, Eigen::Index n, const std::vector<double>& fre
   g.sigma = 0.3;
   g.seed = seed;
   const Eigen::VectorXd u = signal::gaussian_excitation(g);
-  Eigen::VectorXd y = simulate(sopdt(), u, kDt);
+  Eigen::VectorXd y = model::simulate(sopdt(), u, kDt);
   signal::Xoshiro256 rng(seed * 7919 + 1);
   const double white_kw = 5.0, coloured_kw = 4.0, pole = 0.98;
   double ar = 0.0;
@@ -66,7 +66,7 @@ McRun one_run(std::uint64_t seed, Eigen::Index n, const std::vector<double>& fre
   MmfmOptions o;
   o.order = {2, 0};
   McRun r;
-  const TransferFunction start =
+  const model::TransferFunction start =
       estimate_mmfm(signal::auto_correlation(u, w), signal::cross_correlation(y, u, w), o).model;
   r.model = refine_output_error(u, y, kDt, start, true).model;
   const InputNoiseSpectra s = input_noise_spectra(u, y, kDt, r.model);
@@ -76,13 +76,13 @@ McRun one_run(std::uint64_t seed, Eigen::Index n, const std::vector<double>& fre
 }
 
 TEST(FrfUncertainty, GradientMatchesFiniteDifferences) {
-  const TransferFunction tf = sopdt();
+  const model::TransferFunction tf = sopdt();
   const double f = 1.7, h = 1e-6;
   const Eigen::VectorXcd psi = response_gradient(tf, f, true);
   ASSERT_EQ(psi.size(), 4);
   // theta = [a1, a0, b0, Td] of the monic model.
   for (int i = 0; i < 4; ++i) {
-    TransferFunction p = tf;
+    model::TransferFunction p = tf;
     if (i < 2) p.den(1 + i) += h * std::max(1.0, std::abs(tf.den(1 + i)));
     if (i == 2) p.num(0) += h * tf.num(0);
     if (i == 3) p.delay_s += h;
@@ -115,7 +115,7 @@ TEST(FrfUncertainty, BandMatchesMonteCarloSpreadAndCoversTheTruth) {
   constexpr int kRuns = 30;
   constexpr std::uint64_t kSeed = 20261123;
   std::printf("[ seed %llu, %d runs ]\n", static_cast<unsigned long long>(kSeed), kRuns);
-  const TransferFunction truth = sopdt();
+  const model::TransferFunction truth = sopdt();
   std::vector<double> sum_db(freqs.size()), sum2_db(freqs.size()), pred_db(freqs.size());
   std::vector<double> sum2_deg(freqs.size()), pred_deg(freqs.size());
   int covered = 0, judged = 0;

@@ -18,7 +18,7 @@ TEST(Identify, MmfmStornowayAtZeroDbSnr) {
   for (std::uint64_t seed = 21; seed < 24; ++seed) {
     const auto rec = experiments::stornoway_record(seed, 5.0);
     IdentifyOptions io;
-    io.order = ModelOrder{2, 0};
+    io.order = model::ModelOrder{2, 0};
     io.correlator.lags = 512;
     const IdentifyResult r = identify(rec.u.array() + 3.0, rec.y.array() + 100.0, rec.dt_s, io);
     ASSERT_TRUE(r.derived.valid);
@@ -36,7 +36,7 @@ TEST(Identify, MmfmStornowayAtZeroDbSnr) {
     EXPECT_DOUBLE_EQ(r.parameters.front().value, 1.0);  // a_n = 1
     EXPECT_EQ(r.ryu.size(), 512);
     EXPECT_EQ(r.model_ryu.size(), r.ruu.size());
-    EXPECT_GT(fit_percent(r.ryu.r, r.model_ryu.r), 80.0);
+    EXPECT_GT(model::fit_percent(r.ryu.r, r.model_ryu.r), 80.0);
     EXPECT_NE(r.settings.find("hermite"), std::string::npos);
   }
 }
@@ -63,7 +63,7 @@ TEST(Identify, SrivcPathAndGivenDelay) {
   const auto rec = experiments::stornoway_record(41, 2.0);
   IdentifyOptions io;
   io.method = IdentMethod::kSrivc;
-  io.order = ModelOrder{2, 0};
+  io.order = model::ModelOrder{2, 0};
   io.delay_s = 0.06;
   const IdentifyResult r = identify(rec.u, rec.y, rec.dt_s, io);
   EXPECT_DOUBLE_EQ(r.delay_s, 0.06);

@@ -14,8 +14,8 @@ using testing::triangle_pair;
 
 struct Case {
   const char* name;
-  TransferFunction tf;
-  ModelOrder order;
+  model::TransferFunction tf;
+  model::ModelOrder order;
 };
 
 std::vector<Case> noise_free_cases() {
@@ -28,9 +28,9 @@ std::vector<Case> noise_free_cases() {
   };
 }
 
-void expect_coefficients_within(const TransferFunction& got, const TransferFunction& want,
-                                double rel, const char* name) {
-  const TransferFunction g = monic(got), w = monic(want);
+void expect_coefficients_within(const model::TransferFunction& got,
+                                const model::TransferFunction& want, double rel, const char* name) {
+  const model::TransferFunction g = model::monic(got), w = model::monic(want);
   ASSERT_EQ(g.den.size(), w.den.size()) << name;
   ASSERT_EQ(g.num.size(), w.num.size()) << name;
   for (Eigen::Index i = 0; i < w.den.size(); ++i)
@@ -53,7 +53,7 @@ TEST(Mmfm, NoiseFreeFirstToFourthOrderWithinPointOnePercent) {
 }
 
 TEST(Mmfm, TotalLeastSquaresAndPolynomialFamilyNoiseFree) {
-  const TransferFunction tf = make_tf({10.0}, {1.0, 2.0, 10.0});
+  const model::TransferFunction tf = make_tf({10.0}, {1.0, 2.0, 10.0});
   const auto p = triangle_pair(tf, 0.05, 0.01, 1000, 400);
   MmfmOptions opt;
   opt.order = {2, 0};
@@ -67,7 +67,7 @@ TEST(Mmfm, TotalLeastSquaresAndPolynomialFamilyNoiseFree) {
 
 TEST(Mmfm, ThesisNormalisationB0EqualsOne) {
   // Stornoway form 1 / (q2 s^2 + q1 s + q0).
-  const TransferFunction tf = make_tf({1.0}, {0.07, 0.19, 11.05});
+  const model::TransferFunction tf = make_tf({1.0}, {0.07, 0.19, 11.05});
   const auto p = triangle_pair(tf, 0.02, 0.005, 1000, 400);
   MmfmOptions opt;
   opt.order = {2, 0};
@@ -84,7 +84,7 @@ TEST(Mmfm, ThesisNormalisationB0EqualsOne) {
 }
 
 TEST(Mmfm, FindsFractionalDeadTimeAutomatically) {
-  const TransferFunction tf = make_tf({10.0}, {1.0, 2.0, 10.0}, 0.137);
+  const model::TransferFunction tf = make_tf({10.0}, {1.0, 2.0, 10.0}, 0.137);
   const auto p = triangle_pair(tf, 0.05, 0.01, 1000, 400);
   MmfmOptions opt;
   opt.order = {2, 0};
@@ -97,7 +97,8 @@ TEST(Mmfm, FindsFractionalDeadTimeAutomatically) {
 TEST(Mmfm, ThesisModelOrderEffectOfAFarPole) {
   // Thesis 5-1-3: a real pole at -20 beside the pair -1+-3j still biases a second-order fit
   // (natural frequency low); letting the dead time absorb the lag removes most of it.
-  const TransferFunction plant = make_tf({200.0}, {1.0, 22.0, 50.0, 200.0});  // (s^2+2s+10)(s+20)
+  const model::TransferFunction plant =
+      make_tf({200.0}, {1.0, 22.0, 50.0, 200.0});  // (s^2+2s+10)(s+20)
   const auto p = triangle_pair(plant, 0.05, 0.01, 1000, 400);
   const double fn_true = std::sqrt(10.0) / (2 * M_PI);
   MmfmOptions opt;

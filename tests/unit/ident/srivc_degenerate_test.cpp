@@ -1,4 +1,6 @@
 // SRIVC on degenerate data and on the public DaISy dryer record.
+#include <gtest/gtest.h>
+
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -8,29 +10,27 @@
 #include <stdexcept>
 #include <vector>
 
-#include <gtest/gtest.h>
-
 #include "rig/ident/identify.hpp"
 #include "rig/ident/srivc.hpp"
-#include "rig/ident/transfer_function.hpp"
+#include "rig/model/transfer_function.hpp"
 
 namespace rig::ident {
 namespace {
 
 TEST(SrivcDegenerate, FilteredDerivativesRejectsUnusableDenominator) {
   const Eigen::VectorXd u = Eigen::VectorXd::LinSpaced(50, 0.0, 1.0);
-  EXPECT_THROW(filtered_derivatives(Eigen::VectorXd(), u, 0.1, 0.0), std::invalid_argument);
-  EXPECT_THROW(filtered_derivatives(Eigen::VectorXd::Zero(3), u, 0.1, 0.0),
+  EXPECT_THROW(model::filtered_derivatives(Eigen::VectorXd(), u, 0.1, 0.0), std::invalid_argument);
+  EXPECT_THROW(model::filtered_derivatives(Eigen::VectorXd::Zero(3), u, 0.1, 0.0),
                std::invalid_argument);
   Eigen::Vector3d nan_den(1.0, std::numeric_limits<double>::quiet_NaN(), 2.0);
-  EXPECT_THROW(filtered_derivatives(nan_den, u, 0.1, 0.0), std::invalid_argument);
-  EXPECT_EQ(filtered_derivatives(Eigen::Vector3d(0.0, 1.0, 2.0), u, 0.1, 0.0).cols(), 2);
+  EXPECT_THROW(model::filtered_derivatives(nan_den, u, 0.1, 0.0), std::invalid_argument);
+  EXPECT_EQ(model::filtered_derivatives(Eigen::Vector3d(0.0, 1.0, 2.0), u, 0.1, 0.0).cols(), 2);
 }
 
 TEST(SrivcDegenerate, SingularInstrumentsAtEveryDelayThrowInsteadOfCrashing) {
   // A zero input makes the input columns of the instrument matrix zero, so every IV step is
   // singular: with the delay searched, the warm start used to be an empty denominator that
-  // filtered_derivatives indexed out of range.
+  // model::filtered_derivatives indexed out of range.
   const Eigen::Index n_samples = 400;
   const Eigen::VectorXd u = Eigen::VectorXd::Zero(n_samples);
   Eigen::VectorXd y(n_samples);
@@ -70,7 +70,7 @@ TEST(SrivcDegenerate, DryerRecordAutomaticOrderAndDelay) {
   const Eigen::VectorXd uc = u.array() - u.mean(), yc = y.array() - y.mean();
   const SrivcResult half = estimate_srivc(uc.head(h), yc.head(h), 0.08, so);
   const Eigen::VectorXd y_hat = simulate(half.model, uc, 0.08);
-  EXPECT_GT(fit_percent(yc.tail(u.size() - h), y_hat.tail(u.size() - h)), 80.0);
+  EXPECT_GT(model::fit_percent(yc.tail(u.size() - h), y_hat.tail(u.size() - h)), 80.0);
 }
 
 }  // namespace

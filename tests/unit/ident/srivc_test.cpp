@@ -15,7 +15,7 @@ TEST(Srivc, NoiseFreeStornowayExactWithDelay) {
   so.order = {2, 0};
   so.max_delay_s = 0.3;
   const SrivcResult r = estimate_srivc(rec.u, rec.y, rec.dt_s, so);
-  const TransferFunction want = monic(experiments::stornoway_tf());
+  const model::TransferFunction want = model::monic(experiments::stornoway_tf());
   for (Eigen::Index i = 0; i < 3; ++i) EXPECT_NEAR(r.model.den(i), want.den(i), 1e-3 * want.den(i));
   EXPECT_NEAR(r.model.num(0), want.num(0), 1e-3 * want.num(0));
   EXPECT_NEAR(r.delay_s, 0.06, 2e-4);
@@ -44,7 +44,7 @@ TEST(Srivc, NoisyEstimatesWithinReportedStandardErrors) {
 }
 
 TEST(Crlb, SensitivitiesMatchFiniteDifferences) {
-  TransferFunction tf;
+  model::TransferFunction tf;
   tf.num = Eigen::Vector2d(2.0, 30.0);
   tf.den = Eigen::Vector3d(1.0, 3.0, 40.0);
   tf.delay_s = 0.043;
@@ -53,7 +53,7 @@ TEST(Crlb, SensitivitiesMatchFiniteDifferences) {
   // theta = [a1 a0 b1 b0 Td].
   for (int c = 0; c < 5; ++c) {
     const double h = c == 4 ? 1e-4 : 1e-5 * std::max(1.0, std::abs(pack_parameters(tf)(c + 1)));
-    TransferFunction hi = tf, lo = tf;
+    model::TransferFunction hi = tf, lo = tf;
     if (c < 2) hi.den(c + 1) += h, lo.den(c + 1) -= h;
     else if (c < 4) hi.num(c - 2) += h, lo.num(c - 2) -= h;
     else hi.delay_s += h, lo.delay_s -= h;
@@ -66,7 +66,7 @@ TEST(Crlb, SensitivitiesMatchFiniteDifferences) {
 
 TEST(Crlb, ScalesWithNoiseAndBoundsTheDelay) {
   const auto rec = experiments::stornoway_record(5, 2.0);
-  const TransferFunction tf = experiments::stornoway_tf();
+  const model::TransferFunction tf = experiments::stornoway_tf();
   const CramerRaoBound a = cramer_rao_bound(tf, rec.u, rec.dt_s, 1.0);
   const CramerRaoBound b = cramer_rao_bound(tf, rec.u, rec.dt_s, 4.0);
   ASSERT_EQ(a.names.size(), 4u);  // a1 a0 b0 delay_s

@@ -17,7 +17,7 @@ TEST(StornowayMc, MmfmMeetsBiasAndSpreadTargets) {
   for (std::uint64_t seed = 100; seed < 106; ++seed) {
     const auto rec = experiments::stornoway_record(seed, 10.0);
     IdentifyOptions io;
-    io.order = ModelOrder{2, 0};
+    io.order = model::ModelOrder{2, 0};
     io.correlator.lags = 512;
     io.blocks = 0;
     const IdentifyResult r = identify(rec.u, rec.y, rec.dt_s, io);
@@ -38,15 +38,15 @@ TEST(StornowayMc, MmfmMeetsBiasAndSpreadTargets) {
 TEST(MmfmRefine, CorrelationOutputErrorKeepsNoiseFreeTruthAndTightensNoisyFits) {
   const auto rec = experiments::stornoway_record(7, 10.0);
   IdentifyOptions io;
-  io.order = ModelOrder{2, 0};
+  io.order = model::ModelOrder{2, 0};
   io.correlator.lags = 512;
   io.blocks = 0;
   const IdentifyResult plain = identify(rec.u, rec.y, rec.dt_s, io);
   io.mmfm.refine = true;
   const IdentifyResult refined = identify(rec.u, rec.y, rec.dt_s, io);
   // The refinement minimises exactly the correlation misfit, so it cannot be worse there.
-  EXPECT_GE(fit_percent(refined.ryu.r, refined.model_ryu.r),
-            fit_percent(plain.ryu.r, plain.model_ryu.r) - 1e-9);
+  EXPECT_GE(model::fit_percent(refined.ryu.r, refined.model_ryu.r),
+            model::fit_percent(plain.ryu.r, plain.model_ryu.r) - 1e-9);
   EXPECT_NE(refined.settings.find("refined"), std::string::npos);
   const auto clean = experiments::stornoway_record(7, 10.0, 300.0);
   const IdentifyResult exact = identify(clean.u, clean.y, clean.dt_s, io);

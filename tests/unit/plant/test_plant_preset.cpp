@@ -74,7 +74,7 @@ TEST(PlantPreset, RationalTfWithDelayMatchesExactLinearResponse) {
   const LinearModel& lm = stornoway();
   for (int i = 0; i <= 400; ++i) {
     const double f = 0.002 * std::pow(10000.0, i / 400.0);  // 0.002-20 Hz
-    const std::complex<double> r = lm.tf_response(f) / lm.response(f);
+    const std::complex<double> r = lm.tf.response(f) / lm.response(f);
     ASSERT_LT(std::abs(db(r)), 0.02) << f;
     ASSERT_LT(std::abs(deg(r)), 0.15) << f;
   }
@@ -105,12 +105,12 @@ TEST(PlantPreset, CommittedModelFileMatchesFreshLinearisation) {
   EXPECT_EQ(j.at("output"), "power_kw");
   const auto num = j.at("num").get<std::vector<double>>();
   const auto den = j.at("den").get<std::vector<double>>();
-  ASSERT_EQ(num.size(), static_cast<std::size_t>(lm.num.size()));
-  ASSERT_EQ(den.size(), static_cast<std::size_t>(lm.den.size()));
+  ASSERT_EQ(num.size(), static_cast<std::size_t>(lm.tf.num.size()));
+  ASSERT_EQ(den.size(), static_cast<std::size_t>(lm.tf.den.size()));
   for (std::size_t k = 0; k < num.size(); ++k)
-    EXPECT_NEAR(num[k], lm.num[k], 1e-6 * std::abs(lm.num[k]));
+    EXPECT_NEAR(num[k], lm.tf.num[k], 1e-6 * std::abs(lm.tf.num[k]));
   for (std::size_t k = 0; k < den.size(); ++k)
-    EXPECT_NEAR(den[k], lm.den[k], 1e-6 * std::abs(lm.den[k]));
+    EXPECT_NEAR(den[k], lm.tf.den[k], 1e-6 * std::abs(lm.tf.den[k]));
   EXPECT_NEAR(j.at("delay_s").get<double>(), lm.delay_s, 1e-12);
   const auto& d = j.at("derived");
   EXPECT_NEAR(d.at("fn_hz").get<double>(), lm.fn_hz, 1e-6);
@@ -123,7 +123,7 @@ TEST(PlantPreset, WriteTfJsonRoundTrips) {
   write_tf_json(stornoway(), file);
   std::ifstream in(file);
   const auto j = nlohmann::json::parse(in);
-  EXPECT_EQ(j.at("num").size(), static_cast<std::size_t>(stornoway().num.size()));
+  EXPECT_EQ(j.at("num").size(), static_cast<std::size_t>(stornoway().tf.num.size()));
   EXPECT_EQ(j.at("units").at("output"), "kW");
   std::filesystem::remove(file);
 }

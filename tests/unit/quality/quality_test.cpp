@@ -1,13 +1,14 @@
 // Each bad case is built synthetically from a known plant and must raise its flag; the
 // clean record must raise none. Seeds are fixed and printed.
+#include "rig/ident/quality.hpp"
+
+#include <gtest/gtest.h>
+
 #include <cmath>
 #include <iostream>
 #include <random>
 
-#include <gtest/gtest.h>
-
-#include "rig/ident/quality.hpp"
-#include "rig/ident/transfer_function.hpp"
+#include "rig/model/transfer_function.hpp"
 #include "rig/signal/ac_coupling.hpp"
 #include "rig/signal/excitation.hpp"
 
@@ -19,9 +20,9 @@ constexpr Eigen::Index kN = 8192;
 constexpr std::uint64_t kSeed = 20261121;
 
 // 2nd order + delay: K = 1, fn = 2 Hz, zeta = 0.3, Td = 0.1 s.
-TransferFunction plant(double zeta = 0.3) {
+model::TransferFunction plant(double zeta = 0.3) {
   const double wn = 2 * M_PI * 2.0;
-  TransferFunction tf;
+  model::TransferFunction tf;
   tf.num = Eigen::VectorXd::Constant(1, wn * wn);
   tf.den = (Eigen::VectorXd(3) << 1.0, 2 * zeta * wn, wn * wn).finished();
   tf.delay_s = 0.1;
@@ -137,7 +138,7 @@ TEST(Quality, ClippedOutputAndInputAreFlagged) {
 
 TEST(Quality, SlowPlantLeavesCrossCorrelationUndecayed) {
   const Eigen::VectorXd u = excitation();
-  TransferFunction slow;  // time constant 3 s against a 1.5 s window
+  model::TransferFunction slow;  // time constant 3 s against a 1.5 s window
   slow.num = Eigen::VectorXd::Constant(1, 1.0);
   slow.den = (Eigen::VectorXd(2) << 3.0, 1.0).finished();
   const Eigen::VectorXd y = noisy(simulate(slow, u, kDt), 0.05, kSeed + 8);

@@ -3,7 +3,7 @@
 #include <cmath>
 #include <random>
 
-#include "rig/ident/transfer_function.hpp"
+#include "rig/model/transfer_function.hpp"
 #include "rig/session/online_mmfm.hpp"
 #include "rig/session/pilot.hpp"
 #include "rig/signal/excitation.hpp"
@@ -12,9 +12,9 @@ namespace rig::session {
 namespace {
 
 // H(s) = 46 wn^2 e^{-0.06 s} / (s^2 + 2 zeta wn s + wn^2), fn 2 Hz, zeta 0.1 (kW per %).
-ident::TransferFunction plant() {
+model::TransferFunction plant() {
   const double wn = 2.0 * M_PI * 2.0;
-  ident::TransferFunction tf;
+  model::TransferFunction tf;
   tf.num = Eigen::VectorXd::Constant(1, 46.0 * wn * wn);
   tf.den = Eigen::Vector3d(1.0, 2.0 * 0.1 * wn, wn * wn);
   tf.delay_s = 0.06;
@@ -34,7 +34,7 @@ Record record(double dt) {
   g.seed = 11;
   Record r;
   r.u = signal::gaussian_excitation(g);
-  r.y = ident::simulate(plant(), r.u, dt);
+  r.y = model::simulate(plant(), r.u, dt);
   std::mt19937 gen(12);
   std::normal_distribution<double> noise(0.0, 2.0);
   for (Eigen::Index i = 0; i < r.y.size(); ++i) r.y(i) += noise(gen);

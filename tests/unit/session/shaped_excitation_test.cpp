@@ -17,9 +17,9 @@ namespace {
 
 constexpr double kDt = 0.01;
 
-ident::TransferFunction plant() {
+model::TransferFunction plant() {
   const double wn = 2.0 * M_PI * 2.03, zeta = 0.1;
-  ident::TransferFunction tf;
+  model::TransferFunction tf;
   tf.num = Eigen::VectorXd::Constant(1, 46.0 * wn * wn);
   tf.den = Eigen::Vector3d(1.0, 2.0 * zeta * wn, wn * wn);
   tf.delay_s = 0.078;
@@ -35,7 +35,7 @@ void pilot(std::vector<double>& u, std::vector<double>& y) {
   g.sigma = 0.3;
   g.seed = 5;
   const Eigen::VectorXd ue = signal::gaussian_excitation(g);
-  const Eigen::VectorXd ye = ident::simulate(plant(), ue, kDt);
+  const Eigen::VectorXd ye = model::simulate(plant(), ue, kDt);
   signal::Xoshiro256 rng(6);
   u.assign(ue.begin(), ue.end());
   y.resize(u.size());
@@ -65,7 +65,7 @@ TEST(ShapedExcitation, FillsThePlannedBandWithAFlatLowCrestOutput) {
   EXPECT_LE(d.period_pct.cwiseAbs().maxCoeff(), kClampFraction * 5.0 + 1e-9);
   // The plant's steady periodic output (third period) inside half the band, noise aside.
   const Eigen::VectorXd x = repeat_period(d.period_pct, 3 * kShapedPeriodSamples);
-  const Eigen::VectorXd out = ident::simulate(plant(), x, kDt);
+  const Eigen::VectorXd out = model::simulate(plant(), x, kDt);
   const Eigen::VectorXd last = out.tail(kShapedPeriodSamples);
   const double peak = last.cwiseAbs().maxCoeff();
   EXPECT_LE(peak, kOutputPeakFraction * 105.0);

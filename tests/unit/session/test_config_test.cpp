@@ -6,6 +6,9 @@
 #include <utility>
 #include <vector>
 
+#include "rig/session/phase.hpp"
+#include "rig/session/supervisor.hpp"
+
 namespace rig::session {
 namespace {
 
@@ -27,6 +30,27 @@ TEST(TestConfig, DefaultsAreValidAndDocumentedValuesHold) {
   EXPECT_DOUBLE_EQ(c.compare.from_hz, 0.5);
   EXPECT_DOUBLE_EQ(c.compare.to_hz, 5.0);
   EXPECT_EQ(c.excitation.type, ExcitationType::kGaussian);
+}
+
+// One source of the safety defaults: a test file that leaves [safety] (and the sample rate)
+// out gives exactly the supervisor configuration the supervisor has by default. Before,
+// SupervisorConfig clamped at 2 % and ramped at 1 %/s while the test file said 5 % and 2 %/s.
+TEST(TestConfig, SafetyDefaultsGiveTheSupervisorsOwnDefaults) {
+  const SupervisorConfig from_file = supervisor_config_from(parse_test_toml("", "test.toml"));
+  const SupervisorConfig own;
+  EXPECT_DOUBLE_EQ(from_file.band_fraction, own.band_fraction);
+  EXPECT_DOUBLE_EQ(from_file.clamp_pct, own.clamp_pct);
+  EXPECT_DOUBLE_EQ(from_file.ramp_rate_pct_per_s, own.ramp_rate_pct_per_s);
+  EXPECT_DOUBLE_EQ(from_file.dt_s, own.dt_s);
+  EXPECT_DOUBLE_EQ(from_file.backoff.zero_fraction, own.backoff.zero_fraction);
+  EXPECT_DOUBLE_EQ(from_file.backoff.plan_fraction, own.backoff.plan_fraction);
+  EXPECT_DOUBLE_EQ(from_file.echo.tolerance_pct, own.echo.tolerance_pct);
+  EXPECT_EQ(from_file.echo.delay_ticks, own.echo.delay_ticks);
+  EXPECT_EQ(from_file.echo.max_bad_ticks, own.echo.max_bad_ticks);
+  EXPECT_TRUE(from_file == own) << "some other field differs";
+  // And a [safety] value does reach the supervisor.
+  const TestConfig c = parse_test_toml("[safety]\nclamp_pct = 3.5\n", "test.toml");
+  EXPECT_DOUBLE_EQ(supervisor_config_from(c).clamp_pct, 3.5);
 }
 
 TEST(TestConfig, ReadsEverySectionIntoItsField) {

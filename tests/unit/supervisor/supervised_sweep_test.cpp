@@ -74,7 +74,7 @@ TEST(SupervisedSweep, StaysInBandWithRightAndOptimisticPriors) {
     for (const auto& res : r.results) {
       if (res.point.freq_hz < 0.5 || res.point.freq_hz > 5.0) continue;
       // Magnitude only: the ZOH plant adds half a sample of lag that the analytic |G| lacks.
-      EXPECT_NEAR(fra::to_db(res.mag), fra::to_db(p.magnitude(res.point.freq_hz)), 0.5)
+      EXPECT_NEAR(model::to_db(res.mag), model::to_db(p.magnitude(res.point.freq_hz)), 0.5)
           << res.point.freq_hz << " Hz";
     }
   }

@@ -1,14 +1,14 @@
-#include "rig/io/model_file.hpp"
+#include "rig/model/model_file.hpp"
 
 #include <fmt/format.h>
 
 #include <algorithm>
 #include <cmath>
 
-#include "rig/io/atomic_file.hpp"
-#include "rig/io/input_error.hpp"
+#include "rig/model/atomic_file.hpp"
+#include "rig/model/input_error.hpp"
 
-namespace rig::io {
+namespace rig::model {
 namespace {
 
 using nlohmann::json;
@@ -17,14 +17,18 @@ Eigen::VectorXd coefficients(const json& doc, const char* key, const std::string
   if (!doc.contains(key)) throw InputError(source, 0, "", fmt::format("missing key \"{}\"", key));
   const json& v = doc.at(key);
   if (!v.is_array() || v.empty()) {
-    throw InputError(source, 0, "", fmt::format("key \"{}\": expected a non-empty array of "
-                                                "numbers, found {}", key, v.dump()));
+    throw InputError(source, 0, "",
+                     fmt::format("key \"{}\": expected a non-empty array of "
+                                 "numbers, found {}",
+                                 key, v.dump()));
   }
   Eigen::VectorXd out(Eigen::Index(v.size()));
   for (std::size_t i = 0; i < v.size(); ++i) {
     if (!v[i].is_number() || !std::isfinite(v[i].get<double>())) {
-      throw InputError(source, 0, "", fmt::format("key \"{}\"[{}]: expected a finite number, "
-                                                  "found {}", key, i, v[i].dump()));
+      throw InputError(source, 0, "",
+                       fmt::format("key \"{}\"[{}]: expected a finite number, "
+                                   "found {}",
+                                   key, i, v[i].dump()));
     }
     out[Eigen::Index(i)] = v[i].get<double>();
   }
@@ -38,12 +42,15 @@ Eigen::MatrixXd covariance(const json& v, const std::string& source) {
   Eigen::MatrixXd out(size, size);
   for (std::size_t i = 0; i < n; ++i) {
     if (!v[i].is_array() || v[i].size() != n) {
-      throw InputError(source, 0, "", fmt::format("key \"cov\": row {} must hold {} numbers", i, n));
+      throw InputError(source, 0, "",
+                       fmt::format("key \"cov\": row {} must hold {} numbers", i, n));
     }
     for (std::size_t j = 0; j < n; ++j) {
       if (!v[i][j].is_number() || !std::isfinite(v[i][j].get<double>())) {
-        throw InputError(source, 0, "", fmt::format("key \"cov\"[{}][{}]: expected a finite "
-                                                    "number, found {}", i, j, v[i][j].dump()));
+        throw InputError(source, 0, "",
+                         fmt::format("key \"cov\"[{}][{}]: expected a finite "
+                                     "number, found {}",
+                                     i, j, v[i][j].dump()));
       }
       out(Eigen::Index(i), Eigen::Index(j)) = v[i][j].get<double>();
     }
@@ -52,7 +59,7 @@ Eigen::MatrixXd covariance(const json& v, const std::string& source) {
 }
 
 // deg num <= deg den, den's leading coefficient non-zero; returns "" when valid.
-std::string structure_problem(const ident::TransferFunction& tf) {
+std::string structure_problem(const TransferFunction& tf) {
   if (tf.den.size() == 0) return "key \"den\": expected a non-empty array";
   if (tf.num.size() == 0) return "key \"num\": expected a non-empty array";
   if (tf.den[0] == 0.0) return "key \"den\": the leading (highest-power) coefficient is 0";
@@ -106,8 +113,8 @@ ModelFile model_from_json(const json& doc, const std::string& source) {
   }
   if (doc.contains("units")) out.units = doc["units"];
   for (const auto& [key, value] : doc.items()) {
-    static const std::vector<std::string> known = {"type", "num", "den", "delay_s", "cov",
-                                                   "fit_percent", "input", "output", "units"};
+    static const std::vector<std::string> known = {
+        "type", "num", "den", "delay_s", "cov", "fit_percent", "input", "output", "units"};
     if (std::find(known.begin(), known.end(), key) == known.end()) out.extra[key] = value;
   }
   return out;
@@ -139,7 +146,8 @@ json model_to_json(const ModelFile& model) {
 ModelFile read_model(const std::filesystem::path& path) {
   const std::string text = read_file_text(path);
   const json doc = json::parse(text, nullptr, /*allow_exceptions=*/false);
-  if (doc.is_discarded()) throw InputError(path.string(), 0, "", "expected valid JSON (parse error)");
+  if (doc.is_discarded())
+    throw InputError(path.string(), 0, "", "expected valid JSON (parse error)");
   return model_from_json(doc, path.string());
 }
 
@@ -147,4 +155,4 @@ void write_model(const std::filesystem::path& path, const ModelFile& model) {
   write_file_atomic(path, model_to_json(model).dump(2) + "\n");
 }
 
-}  // namespace rig::io
+}  // namespace rig::model

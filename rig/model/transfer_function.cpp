@@ -1,15 +1,14 @@
-#include "rig/ident/transfer_function.hpp"
+#include "rig/model/transfer_function.hpp"
 
+#include <Eigen/Eigenvalues>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
 #include <string>
+#include <unsupported/Eigen/MatrixFunctions>
 #include <vector>
 
-#include <Eigen/Eigenvalues>
-#include <unsupported/Eigen/MatrixFunctions>
-
-namespace rig::ident {
+namespace rig::model {
 namespace {
 
 Eigen::VectorXd trim_leading_zeros(const Eigen::VectorXd& p) {
@@ -65,8 +64,9 @@ std::complex<double> TransferFunction::response(double freq_hz) const {
 double TransferFunction::dc_gain() const {
   const double a0 = den(den.size() - 1);
   const double b0 = num(num.size() - 1);
-  if (a0 == 0.0) return b0 >= 0 ? std::numeric_limits<double>::infinity()
-                                : -std::numeric_limits<double>::infinity();
+  if (a0 == 0.0)
+    return b0 >= 0 ? std::numeric_limits<double>::infinity()
+                   : -std::numeric_limits<double>::infinity();
   return b0 / a0;
 }
 
@@ -80,9 +80,7 @@ bool TransferFunction::is_stable() const {
   return true;
 }
 
-int TransferFunction::order() const {
-  return static_cast<int>(trim_leading_zeros(den).size()) - 1;
-}
+int TransferFunction::order() const { return static_cast<int>(trim_leading_zeros(den).size()) - 1; }
 int TransferFunction::numerator_order() const {
   return static_cast<int>(trim_leading_zeros(num).size()) - 1;
 }
@@ -192,8 +190,7 @@ Eigen::MatrixXd free_response_basis(const TransferFunction& tf_in, Eigen::Index 
   return out;
 }
 
-Eigen::VectorXd simulate(const TransferFunction& tf_in, const Eigen::VectorXd& u,
-                         double dt_s) {
+Eigen::VectorXd simulate(const TransferFunction& tf_in, const Eigen::VectorXd& u, double dt_s) {
   if (tf_in.den.size() == 0 || tf_in.num.size() == 0 || tf_in.den.cwiseAbs().maxCoeff() == 0)
     throw std::invalid_argument("simulate: empty numerator or zero denominator");
   if (!tf_in.is_proper()) throw std::invalid_argument("simulate: transfer function is improper");
@@ -213,4 +210,4 @@ double fit_percent(const Eigen::VectorXd& y, const Eigen::VectorXd& yhat) {
   return 100.0 * (1.0 - (y - yhat).norm() / den);
 }
 
-}  // namespace rig::ident
+}  // namespace rig::model

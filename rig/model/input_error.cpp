@@ -1,4 +1,4 @@
-#include "rig/io/input_error.hpp"
+#include "rig/model/input_error.hpp"
 
 #include <fcntl.h>
 #include <fmt/format.h>
@@ -8,7 +8,7 @@
 #include <cerrno>
 #include <cstring>
 
-namespace rig::io {
+namespace rig::model {
 namespace {
 
 std::string compose(const std::string& file, long line, const std::string& column,
@@ -96,4 +96,4 @@ std::string read_small_input_file(const std::filesystem::path& path, const std::
   return text;
 }
 
-}  // namespace rig::io
+}  // namespace rig::model

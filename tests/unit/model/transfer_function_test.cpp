@@ -1,14 +1,21 @@
-#include <cmath>
+#include "rig/model/transfer_function.hpp"
 
 #include <gtest/gtest.h>
 
-#include "analytic_correlations.hpp"
-#include "rig/ident/transfer_function.hpp"
+#include <cmath>
+#include <initializer_list>
 
-namespace rig::ident {
+namespace rig::model {
 namespace {
 
-using testing::make_tf;
+TransferFunction make_tf(std::initializer_list<double> num, std::initializer_list<double> den,
+                         double delay_s = 0.0) {
+  TransferFunction tf;
+  tf.num = Eigen::Map<const Eigen::VectorXd>(num.begin(), static_cast<Eigen::Index>(num.size()));
+  tf.den = Eigen::Map<const Eigen::VectorXd>(den.begin(), static_cast<Eigen::Index>(den.size()));
+  tf.delay_s = delay_s;
+  return tf;
+}
 
 Eigen::VectorXd time_axis(Eigen::Index n, double dt) {
   return Eigen::VectorXd::LinSpaced(n, 0.0, static_cast<double>(n - 1) * dt);
@@ -112,4 +119,4 @@ TEST(TransferFunction, FitPercentIsNrmse) {
 }
 
 }  // namespace
-}  // namespace rig::ident
+}  // namespace rig::model

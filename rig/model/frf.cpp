@@ -1,6 +1,6 @@
-#include "rig/fra/frf.hpp"
+#include "rig/model/frf.hpp"
 
-namespace rig::fra {
+namespace rig::model {
 
 void unwrap_phase_deg(std::vector<FrfPoint>& points) {
   for (std::size_t i = 1; i < points.size(); ++i) {
@@ -10,4 +10,8 @@ void unwrap_phase_deg(std::vector<FrfPoint>& points) {
   }
 }
 
-}  // namespace rig::fra
+void add_delay(std::vector<FrfPoint>& points, double delay_s) {
+  for (auto& p : points) p.phase_deg = wrap_deg(p.phase_deg - 360.0 * p.freq_hz * delay_s);
+}
+
+}  // namespace rig::model

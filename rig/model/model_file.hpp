@@ -7,24 +7,23 @@
 // delay_s >= 0, cov square.
 #pragma once
 
+#include <Eigen/Core>
 #include <filesystem>
+#include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
 
-#include <Eigen/Core>
-#include <nlohmann/json.hpp>
+#include "rig/model/transfer_function.hpp"
 
-#include "rig/ident/transfer_function.hpp"
-
-namespace rig::io {
+namespace rig::model {
 
 struct ModelFile {
-  ident::TransferFunction tf;
-  std::optional<Eigen::MatrixXd> cov;    // parameter covariance (order as the producer says)
+  TransferFunction tf;
+  std::optional<Eigen::MatrixXd> cov;  // parameter covariance (order as the producer says)
   std::optional<double> fit_percent;
-  std::string input;                     // column/signal names, "" when unknown
+  std::string input;  // column/signal names, "" when unknown
   std::string output;
-  nlohmann::json units;                  // null, a string ("kW/%") or an object
+  nlohmann::json units;                             // null, a string ("kW/%") or an object
   nlohmann::json extra = nlohmann::json::object();  // other keys, kept on round trip
 };
 
@@ -36,4 +35,4 @@ ModelFile read_model(const std::filesystem::path& path);
 // Validates first (std::invalid_argument on a bad model), then writes atomically.
 void write_model(const std::filesystem::path& path, const ModelFile& model);
 
-}  // namespace rig::io
+}  // namespace rig::model

@@ -1,16 +1,17 @@
+#include "rig/model/model_file.hpp"
+
 #include <gtest/gtest.h>
 
-#include "rig/io/input_error.hpp"
-#include "rig/io/model_file.hpp"
-#include "test_files.hpp"
+#include "../io/test_files.hpp"
+#include "rig/model/input_error.hpp"
 
-namespace rig::io {
+namespace rig::model {
 namespace {
 
 using nlohmann::json;
 
 TEST(ModelFile, RoundTripKeepsEveryField) {
-  const auto dir = testing::scratch_dir();
+  const auto dir = io::testing::scratch_dir();
   ModelFile m;
   m.tf.num = Eigen::VectorXd::Constant(1, 1.0);
   m.tf.den = (Eigen::VectorXd(3) << 0.07, 0.19, 11.05).finished();
@@ -76,10 +77,10 @@ TEST(ModelFile, WritingAnImproperModelThrows) {
 }
 
 TEST(ModelFile, UnparsableJsonNamesTheFile) {
-  const auto dir = testing::scratch_dir();
-  testing::write_text(dir / "m.json", "{\"type\": \"tf\",");
+  const auto dir = io::testing::scratch_dir();
+  io::testing::write_text(dir / "m.json", "{\"type\": \"tf\",");
   EXPECT_THROW(read_model(dir / "m.json"), InputError);
 }
 
 }  // namespace
-}  // namespace rig::io
+}  // namespace rig::model

@@ -6,11 +6,10 @@
 // DESIGN.md section 5).
 #pragma once
 
+#include <Eigen/Core>
 #include <complex>
 
-#include <Eigen/Core>
-
-namespace rig::ident {
+namespace rig::model {
 
 struct TransferFunction {
   Eigen::VectorXd num;  // b_m ... b_0
@@ -29,8 +28,8 @@ struct TransferFunction {
   bool is_proper() const;
   Eigen::VectorXcd poles() const;
   Eigen::VectorXcd zeros() const;
-  int order() const;           // n (after trimming)
-  int numerator_order() const; // m (after trimming)
+  int order() const;            // n (after trimming)
+  int numerator_order() const;  // m (after trimming)
 };
 
 // Den order n and numerator order m of a model structure.
@@ -62,10 +61,9 @@ Eigen::MatrixXd filtered_derivatives(const Eigen::VectorXd& den, const Eigen::Ve
 
 // Free (zero-input) responses of tf from the unit initial states of its controllable form,
 // one column each (n columns): they span every initial-condition transient of the system.
-Eigen::MatrixXd free_response_basis(const TransferFunction& tf, Eigen::Index samples,
-                                    double dt_s);
+Eigen::MatrixXd free_response_basis(const TransferFunction& tf, Eigen::Index samples, double dt_s);
 
 // NRMSE fit in %: 100 (1 - |y - yhat| / |y - mean(y)|) (MATLAB compare, DESIGN.md 5).
 double fit_percent(const Eigen::VectorXd& y, const Eigen::VectorXd& yhat);
 
-}  // namespace rig::ident
+}  // namespace rig::model

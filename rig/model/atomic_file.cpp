@@ -1,4 +1,4 @@
-#include "rig/io/atomic_file.hpp"
+#include "rig/model/atomic_file.hpp"
 
 #include <fcntl.h>
 #include <unistd.h>
@@ -9,9 +9,9 @@
 #include <sstream>
 #include <string>
 
-#include "rig/io/input_error.hpp"
+#include "rig/model/input_error.hpp"
 
-namespace rig::io {
+namespace rig::model {
 
 void write_file_atomic(const std::filesystem::path& path, std::string_view text) {
   const std::filesystem::path tmp = path.string() + ".tmp";
@@ -46,4 +46,4 @@ std::string read_file_text(const std::filesystem::path& path) {
   return read_small_input_file(path, "a model", kMaxTextFileBytes);
 }
 
-}  // namespace rig::io
+}  // namespace rig::model
