@@ -1,9 +1,8 @@
 #include "rig/ident/crlb.hpp"
 
+#include <Eigen/LU>
 #include <cmath>
 #include <stdexcept>
-
-#include <Eigen/LU>
 
 #include "rig/ident/srivc.hpp"
 
@@ -11,7 +10,8 @@ namespace rig::ident {
 
 CramerRaoBound cramer_rao_bound(const model::TransferFunction& true_tf, const Eigen::VectorXd& u,
                                 double dt_s, double noise_variance, bool delay_known) {
-  if (!(noise_variance > 0.0)) throw std::invalid_argument("cramer_rao_bound: noise_variance must be > 0");
+  if (!(noise_variance > 0.0))
+    throw std::invalid_argument("cramer_rao_bound: noise_variance must be > 0");
   const model::TransferFunction tf = model::monic(true_tf);
   const int n = tf.order(), m = static_cast<int>(tf.num.size()) - 1;
   const Eigen::MatrixXd jac = output_sensitivities(tf, u, dt_s);

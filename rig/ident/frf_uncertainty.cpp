@@ -1,15 +1,17 @@
 #include "rig/ident/frf_uncertainty.hpp"
 
+#include <Eigen/Eigenvalues>
+#include <Eigen/LU>
 #include <algorithm>
 #include <cmath>
 #include <complex>
+#include <cstdint>
 #include <limits>
 #include <numbers>
 #include <stdexcept>
 
-#include <Eigen/LU>
-
 #include "rig/signal/correlators.hpp"
+#include "rig/signal/random.hpp"
 
 namespace rig::ident {
 namespace {
@@ -19,6 +21,7 @@ constexpr double kTwoPi = 2.0 * std::numbers::pi;
 constexpr double kDbPerNeper = 20.0 / std::numbers::ln10;
 constexpr double kDegPerRad = 180.0 / std::numbers::pi;
 constexpr double kZ95 = 1.959963984540054;
+constexpr std::uint64_t kSimultaneousSeed = 95;
 // The noise spectrum is floored at this share of its peak: a bin with no residual at all
 // would otherwise claim an infinitely precise response.
 constexpr double kMinNoiseShare = 1e-4;
@@ -39,8 +42,8 @@ Eigen::VectorXcd smoothed_spectrum(const signal::Correlation& r, Eigen::Index m,
   const int bins = fft_length / 2 + 1;
   Eigen::VectorXcd out = Eigen::VectorXcd::Zero(bins);
   for (Eigen::Index tau = -m; tau <= m; ++tau) {
-    const double v = parzen(static_cast<double>(tau), static_cast<double>(m) + 1.0) *
-                     r.r(r.zero_index + tau);
+    const double v =
+        parzen(static_cast<double>(tau), static_cast<double>(m) + 1.0) * r.r(r.zero_index + tau);
     if (v == 0.0) continue;
     const double step = -kTwoPi * static_cast<double>(tau) / fft_length;
     for (int k = 0; k < bins; ++k) out(k) += v * std::polar(1.0, step * k);
@@ -69,8 +72,10 @@ InputNoiseSpectra input_noise_spectra(const Eigen::VectorXd& u, const Eigen::Vec
   w.dt_s = dt_s;
   w.kind = signal::CorrelatorKind::kFft;
   const Eigen::VectorXd v = y - model::simulate(model, u, dt_s);
-  const Eigen::VectorXcd suu = smoothed_spectrum(signal::auto_correlation(u, w), half_width, fft_length);
-  const Eigen::VectorXcd svv = smoothed_spectrum(signal::auto_correlation(v, w), half_width, fft_length);
+  const Eigen::VectorXcd suu =
+      smoothed_spectrum(signal::auto_correlation(u, w), half_width, fft_length);
+  const Eigen::VectorXcd svv =
+      smoothed_spectrum(signal::auto_correlation(v, w), half_width, fft_length);
   InputNoiseSpectra s;
   s.dt_s = dt_s;
   s.fft_length = fft_length;
@@ -133,8 +138,8 @@ Eigen::MatrixXd asymptotic_covariance(const model::TransferFunction& model,
   if (!lu.isInvertible()) return inf;
   const Eigen::MatrixXd hi = lu.inverse();
   // avg_w = (1/L) sum over the full circle: P = (1/N) (H/L)^-1 (S/L) (H/L)^-1.
-  const Eigen::MatrixXd cov = static_cast<double>(spectra.fft_length) / samples *
-                              d.asDiagonal() * (hi * ss * hi) * d.asDiagonal();
+  const Eigen::MatrixXd cov = static_cast<double>(spectra.fft_length) / samples * d.asDiagonal() *
+                              (hi * ss * hi) * d.asDiagonal();
   return cov.allFinite() ? cov : inf;
 }
 
@@ -163,11 +168,44 @@ std::vector<FrfUncertainty> frf_uncertainty(const model::TransferFunction& model
   return out;
 }
 
-BandWidth95 worst_band95(const std::vector<FrfUncertainty>& points) {
+double simultaneous_factor95(const model::TransferFunction& model, const Eigen::MatrixXd& cov,
+                             const std::vector<double>& freqs_hz, bool delay_estimated) {
+  const double inf = std::numeric_limits<double>::infinity();
+  if (!cov.allFinite() || freqs_hz.empty()) return inf;
+  // theta = L z with L L^T = cov (eigen-decomposition: cov may be semi-definite).
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(cov);
+  const Eigen::MatrixXd l =
+      eig.eigenvectors() * eig.eigenvalues().cwiseMax(0.0).cwiseSqrt().asDiagonal();
+  const auto n = static_cast<Eigen::Index>(freqs_hz.size());
+  Eigen::MatrixXd j(2 * n, cov.rows());  // rows: dB then deg per frequency, in sd units
+  for (Eigen::Index i = 0; i < n; ++i) {
+    const double f = freqs_hz[static_cast<std::size_t>(i)];
+    const Eigen::VectorXcd rel = response_gradient(model, f, delay_estimated) / model.response(f);
+    const Eigen::VectorXd jd = rel.real(), jp = rel.imag();
+    const double sd_d = std::sqrt(jd.dot(cov * jd)), sd_p = std::sqrt(jp.dot(cov * jp));
+    j.row(i) =
+        (sd_d > 0.0 ? Eigen::VectorXd(jd / sd_d) : Eigen::VectorXd::Zero(jd.size())).transpose();
+    j.row(n + i) =
+        (sd_p > 0.0 ? Eigen::VectorXd(jp / sd_p) : Eigen::VectorXd::Zero(jp.size())).transpose();
+  }
+  const Eigen::MatrixXd jl = j * l;
+  signal::Xoshiro256 rng(kSimultaneousSeed);
+  std::vector<double> worst(kSimultaneousDraws);
+  Eigen::VectorXd z(cov.rows());
+  for (double& w : worst) {
+    for (Eigen::Index k = 0; k < z.size(); ++k) z(k) = rng.normal();
+    w = (jl * z).cwiseAbs().maxCoeff();
+  }
+  const auto q = worst.begin() + static_cast<std::ptrdiff_t>(0.95 * kSimultaneousDraws);
+  std::nth_element(worst.begin(), q, worst.end());
+  return std::max(*q, kZ95);
+}
+
+BandWidth95 worst_band95(const std::vector<FrfUncertainty>& points, double factor) {
   BandWidth95 w;
   for (const auto& p : points) {
-    w.db = std::max(w.db, kZ95 * p.sd_db);
-    w.deg = std::max(w.deg, kZ95 * p.sd_deg);
+    w.db = std::max(w.db, factor * p.sd_db);
+    w.deg = std::max(w.deg, factor * p.sd_deg);
   }
   if (points.empty()) w.db = w.deg = std::numeric_limits<double>::infinity();
   return w;
@@ -179,7 +217,8 @@ std::vector<double> log_frequencies_hz(double f0_hz, double f1_hz, int n) {
   }
   std::vector<double> f(static_cast<std::size_t>(n));
   for (int i = 0; i < n; ++i) {
-    f[static_cast<std::size_t>(i)] = f0_hz * std::pow(f1_hz / f0_hz, static_cast<double>(i) / (n - 1));
+    f[static_cast<std::size_t>(i)] =
+        f0_hz * std::pow(f1_hz / f0_hz, static_cast<double>(i) / (n - 1));
   }
   return f;
 }

@@ -26,9 +26,8 @@
 //     d(dB)/dtheta = (20 / ln 10) Re(psi / G),   d(deg)/dtheta = (180 / pi) Im(psi / G).
 #pragma once
 
-#include <vector>
-
 #include <Eigen/Core>
+#include <vector>
 
 #include "rig/model/transfer_function.hpp"
 #include "rig/signal/correlation.hpp"
@@ -84,12 +83,23 @@ std::vector<FrfUncertainty> frf_uncertainty(const model::TransferFunction& model
                                             const std::vector<double>& freqs_hz,
                                             bool delay_estimated);
 
-// The widest 95 % half-band (1.96 standard deviations) over the points.
+// The factor c of a SIMULTANEOUS 95 % band over the points: with probability 0.95 the
+// estimate's error is within c standard deviations at every point, in magnitude and in
+// phase at once (c > 1.96, the pointwise value, because the band must hold everywhere).
+// The 95th percentile of max_i max(|e_db,i| / sd_db,i, |e_deg,i| / sd_deg,i) over
+// kSimultaneousDraws draws of theta ~ N(0, cov) (a fixed seed: the same inputs give the same
+// factor). Returns infinity when cov is not finite.
+inline constexpr int kSimultaneousDraws = 2000;
+double simultaneous_factor95(const model::TransferFunction& model, const Eigen::MatrixXd& cov,
+                             const std::vector<double>& freqs_hz, bool delay_estimated);
+
+// The widest half-band (factor standard deviations) over the points.
 struct BandWidth95 {
   double db = 0.0;
   double deg = 0.0;
 };
-BandWidth95 worst_band95(const std::vector<FrfUncertainty>& points);
+BandWidth95 worst_band95(const std::vector<FrfUncertainty>& points,
+                         double factor = 1.959963984540054);
 
 // n log-spaced frequencies from f0 to f1 (n >= 2).
 std::vector<double> log_frequencies_hz(double f0_hz, double f1_hz, int n);

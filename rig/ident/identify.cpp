@@ -99,8 +99,8 @@ void block_std_errors(const Eigen::VectorXd& u, const Eigen::VectorXd& y, double
   std::vector<double> delays, gains, fns, zetas;
   for (int i = 0; i < b; ++i) {
     try {
-      Fit f = fit_segment(u.segment(i * len, len), y.segment(i * len, len), dt_s, order, opt,
-                          &fixed);
+      Fit f =
+          fit_segment(u.segment(i * len, len), y.segment(i * len, len), dt_s, order, opt, &fixed);
       const model::TransferFunction t = normalise(f.model, opt.mmfm.normalisation);
       thetas.push_back(pack_parameters(t));
       delays.push_back(t.delay_s);
@@ -162,10 +162,9 @@ IdentifyResult identify(const Eigen::VectorXd& u_raw, const Eigen::VectorXd& y_r
   const std::vector<model::ModelOrder> candidates =
       opt.order ? std::vector<model::ModelOrder>{*opt.order} : opt.candidates;
   res.order_table = score_orders(u, y, dt_s, candidates, opt);
-  const auto best = std::max_element(res.order_table.begin(), res.order_table.end(),
-                                     [](const OrderScore& a, const OrderScore& b) {
-                                       return a.score < b.score;
-                                     });
+  const auto best =
+      std::max_element(res.order_table.begin(), res.order_table.end(),
+                       [](const OrderScore& a, const OrderScore& b) { return a.score < b.score; });
   if (!std::isfinite(best->score))
     throw std::invalid_argument("identify: no candidate order gave a stable model");
   res.order = best->order;
@@ -198,10 +197,9 @@ IdentifyResult identify(const Eigen::VectorXd& u_raw, const Eigen::VectorXd& y_r
     << to_string(opt.mmfm.normalisation) << ", estimation fraction " << opt.estimation_fraction
     << ", lags " << co.lags << ", zero index " << res.ruu.zero_index;
   if (opt.method == IdentMethod::kMmfm)
-    s << ", " << to_string(fit.settings.family) << " functions " << fit.settings.functions
-      << " x " << fit.settings.centres_s.size() << " centres, S " << fit.settings.scale_s
-      << " s, " << fit.settings.extra_bands.size() + 1 << " scale bands, "
-      << to_string(fit.settings.solver)
+    s << ", " << to_string(fit.settings.family) << " functions " << fit.settings.functions << " x "
+      << fit.settings.centres_s.size() << " centres, S " << fit.settings.scale_s << " s, "
+      << fit.settings.extra_bands.size() + 1 << " scale bands, " << to_string(fit.settings.solver)
       << (opt.mmfm.refine ? ", refined by correlation-domain output error" : "");
   s << ", std errors " << res.std_error_method;
   res.settings = s.str();

@@ -34,15 +34,15 @@ struct OrderScore {
 struct IdentifyOptions {
   IdentMethod method = IdentMethod::kMmfm;
   std::optional<model::ModelOrder> order;  // nullopt: selected from candidates
-  std::optional<double> delay_s;         // nullopt: estimated
-  signal::CorrelatorOptions correlator;  // dt_s is overwritten with the record's dt
+  std::optional<double> delay_s;           // nullopt: estimated
+  signal::CorrelatorOptions correlator;    // dt_s is overwritten with the record's dt
   double estimation_fraction = 0.5;
   std::vector<model::ModelOrder> candidates = {{1, 0}, {2, 0}, {2, 1}, {3, 0}, {3, 1},
                                                {3, 2}, {4, 0}, {4, 1}, {4, 2}};
   double penalty_pct_per_parameter = 0.1;
-  int blocks = 8;                        // for block-spread standard errors; 0: analytic
-  double max_delay_s = -1.0;             // < 0: automatic
-  MmfmOptions mmfm;                      // order/delay fields are overridden
+  int blocks = 8;             // for block-spread standard errors; 0: analytic
+  double max_delay_s = -1.0;  // < 0: automatic
+  MmfmOptions mmfm;           // order/delay fields are overridden
 };
 
 struct IdentifyResult {
@@ -55,12 +55,12 @@ struct IdentifyResult {
   std::vector<OrderScore> order_table;
   model::ModelOrder order;
   double validation_fit_pct = 0.0;
-  double condition_number = 0.0;         // MMFM equation matrix (NaN for SRIVC)
-  std::string std_error_method;          // "block spread (8 blocks)" or "analytic"
-  std::string settings;                  // human-readable summary of what was used
+  double condition_number = 0.0;  // MMFM equation matrix (NaN for SRIVC)
+  std::string std_error_method;   // "block spread (8 blocks)" or "analytic"
+  std::string settings;           // human-readable summary of what was used
   MmfmSettings mmfm_settings;
-  signal::Correlation ruu, ryu;          // correlations of the whole record
-  signal::Correlation model_ryu;         // the model's cross-correlation on ruu's lags
+  signal::Correlation ruu, ryu;   // correlations of the whole record
+  signal::Correlation model_ryu;  // the model's cross-correlation on ruu's lags
 };
 
 // Throws std::invalid_argument (one line) for mismatched lengths, too short a record,

@@ -52,7 +52,10 @@ double dominant_time_scale_s(const signal::Correlation& ryu) {
   for (Eigen::Index i = 0; i < a.size(); ++i) {
     acc += a(i);
     if (!got10 && acc >= 0.1 * total) t10 = static_cast<double>(i) * ryu.dt_s, got10 = true;
-    if (acc >= 0.9 * total) { t90 = static_cast<double>(i) * ryu.dt_s; break; }
+    if (acc >= 0.9 * total) {
+      t90 = static_cast<double>(i) * ryu.dt_s;
+      break;
+    }
   }
   return std::max(t90 - t10, 4.0 * ryu.dt_s);
 }
@@ -143,8 +146,8 @@ MmfmResult estimate_mmfm(const signal::Correlation& ruu, const signal::Correlati
     for (int level = 1; level < options.scale_levels; ++level) {
       MmfmSettings wide = st;
       wide.scale_s = s * std::pow(3.0, level);
-      MmfmBand band{wide.scale_s, admissible_centres(ruu, ryu, options.order, td_lo, td_hi,
-                                                     wide, options.centres)};
+      MmfmBand band{wide.scale_s, admissible_centres(ruu, ryu, options.order, td_lo, td_hi, wide,
+                                                     options.centres)};
       if (band.centres_s.empty()) break;
       st.extra_bands.push_back(std::move(band));
     }

@@ -10,11 +10,10 @@
 // normalisation, or by total least squares (normalisation-free, then rescaled).
 #pragma once
 
+#include <Eigen/Core>
 #include <optional>
 #include <string>
 #include <vector>
-
-#include <Eigen/Core>
 
 #include "rig/ident/modulating.hpp"
 #include "rig/ident/parameters.hpp"
@@ -36,9 +35,9 @@ struct MmfmBand {
 // One fixed configuration of the equation set.
 struct MmfmSettings {
   ModulatingFamily family = ModulatingFamily::kHermite;
-  int functions = 8;              // modulating functions per centre
-  double scale_s = 0.1;           // Hermite S; polynomial: window = centre +- 4 S
-  std::vector<double> centres_s;  // lags of the function centres (in r_yu's lag axis)
+  int functions = 8;                  // modulating functions per centre
+  double scale_s = 0.1;               // Hermite S; polynomial: window = centre +- 4 S
+  std::vector<double> centres_s;      // lags of the function centres (in r_yu's lag axis)
   std::vector<MmfmBand> extra_bands;  // further scales (none by default)
   MmfmSolver solver = MmfmSolver::kLeastSquares;
   Normalisation normalisation = Normalisation::kMonicDen;
@@ -46,13 +45,13 @@ struct MmfmSettings {
 
 struct MmfmOptions {
   model::ModelOrder order;
-  std::optional<double> delay_s;      // nullopt: estimated (search near the onset lag)
-  double max_delay_s = -1.0;          // search range upper end; < 0: automatic
+  std::optional<double> delay_s;  // nullopt: estimated (search near the onset lag)
+  double max_delay_s = -1.0;      // search range upper end; < 0: automatic
   ModulatingFamily family = ModulatingFamily::kHermite;
   int functions = 8;
-  int centres = 5;                    // minimum centres (more are added so supports overlap)
-  std::optional<double> scale_s;      // nullopt: scanned (scored by correlation fit)
-  int scale_levels = 3;               // bands at S, 3 S, 9 S ... where they fit the window
+  int centres = 5;                // minimum centres (more are added so supports overlap)
+  std::optional<double> scale_s;  // nullopt: scanned (scored by correlation fit)
+  int scale_levels = 3;           // bands at S, 3 S, 9 S ... where they fit the window
   // After the MMFM solve, minimise |r_yu - h * r_uu|^2 over the coefficients and Td by
   // Levenberg-Marquardt from the MMFM estimate (a correlation-domain output error; the thesis'
   // own model check turned into the criterion). Off: the plain MMFM estimate.
@@ -64,17 +63,17 @@ struct MmfmOptions {
 struct MmfmResult {
   model::TransferFunction model;              // normalised as settings.normalisation
   std::vector<ParameterEstimate> parameters;  // with std errors, last row delay_s
-  Eigen::MatrixXd covariance;          // of theta (ParameterEstimate order without delay)
+  Eigen::MatrixXd covariance;                 // of theta (ParameterEstimate order without delay)
   double delay_s = 0.0;
   double delay_std_s = 0.0;
-  DerivedFigures derived;              // second order only
-  double condition_number = 0.0;       // of the column-equilibrated equation matrix
-  double equation_residual = 0.0;      // relative residual of the equation set
-  double correlation_fit_pct = 0.0;    // model r_yu (= h * r_uu) against measured r_yu
+  DerivedFigures derived;            // second order only
+  double condition_number = 0.0;     // of the column-equilibrated equation matrix
+  double equation_residual = 0.0;    // relative residual of the equation set
+  double correlation_fit_pct = 0.0;  // model r_yu (= h * r_uu) against measured r_yu
   int equations = 0;
-  MmfmSettings settings;               // what was used (scale, centres, solver, ...)
-  bool refined = false;                // correlation-domain output-error refinement applied
-  signal::Correlation model_ryu;       // the model's cross-correlation, for plots
+  MmfmSettings settings;          // what was used (scale, centres, solver, ...)
+  bool refined = false;           // correlation-domain output-error refinement applied
+  signal::Correlation model_ryu;  // the model's cross-correlation, for plots
 };
 
 // One solve with fixed settings and a given delay: builds the equations and solves them.
@@ -95,8 +94,8 @@ MmfmResult estimate_mmfm(const signal::Correlation& ruu, const signal::Correlati
 // (monic; Td fixed when delay_free is false) from start.model. Covariance s^2 (J^T J)^-1 with
 // s^2 = V / (L - p): it treats correlation errors as white, so it is optimistic.
 MmfmResult refine_correlation_output_error(const signal::Correlation& ruu,
-                                           const signal::Correlation& ryu,
-                                           const MmfmResult& start, bool delay_free);
+                                           const signal::Correlation& ryu, const MmfmResult& start,
+                                           bool delay_free);
 
 // The model's cross-correlation r_yu_hat = h * r_uu on r_uu's lag axis (lsim of r_uu).
 signal::Correlation model_cross_correlation(const model::TransferFunction& tf,

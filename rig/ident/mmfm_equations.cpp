@@ -1,12 +1,11 @@
 // The MMFM equation set for one configuration and its (total) least-squares solution.
+#include <Eigen/QR>
+#include <Eigen/SVD>
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
 #include <string>
 #include <utility>
-
-#include <Eigen/QR>
-#include <Eigen/SVD>
 
 #include "rig/ident/mmfm.hpp"
 
@@ -20,8 +19,8 @@ Eigen::MatrixXd function_columns(const Eigen::VectorXd& tau, double centre_s,
                                  const Eigen::MatrixXd* hermite_cache) {
   if (st.family == ModulatingFamily::kHermite) return hermite_cache->middleCols(k, deriv + 1);
   const double hw = 4.0 * st.scale_s;
-  Eigen::MatrixXd d = polynomial_function_derivatives(tau, centre_s - hw, centre_s + hw,
-                                                      deriv + 1 + k, deriv);
+  Eigen::MatrixXd d =
+      polynomial_function_derivatives(tau, centre_s - hw, centre_s + hw, deriv + 1 + k, deriv);
   for (int i = 0; i <= deriv; ++i) d.col(i) *= std::pow(-st.scale_s, i);
   return d;
 }
@@ -35,10 +34,10 @@ std::pair<Eigen::Index, Eigen::Index> support(const signal::Correlation& c, doub
                                               double half_width_s) {
   const double lo = (centre_s - half_width_s) / c.dt_s + static_cast<double>(c.zero_index);
   const double hi = (centre_s + half_width_s) / c.dt_s + static_cast<double>(c.zero_index);
-  const Eigen::Index i0 = std::clamp<Eigen::Index>(static_cast<Eigen::Index>(std::floor(lo)), 0,
-                                                   c.size() - 1);
-  const Eigen::Index i1 = std::clamp<Eigen::Index>(static_cast<Eigen::Index>(std::ceil(hi)), 0,
-                                                   c.size() - 1);
+  const Eigen::Index i0 =
+      std::clamp<Eigen::Index>(static_cast<Eigen::Index>(std::floor(lo)), 0, c.size() - 1);
+  const Eigen::Index i1 =
+      std::clamp<Eigen::Index>(static_cast<Eigen::Index>(std::ceil(hi)), 0, c.size() - 1);
   return {i0, i1 - i0 + 1};
 }
 
@@ -95,8 +94,7 @@ Equations build_equations(const signal::Correlation& ruu, const signal::Correlat
 void check_axes(const signal::Correlation& ruu, const signal::Correlation& ryu) {
   if (ruu.size() != ryu.size() || ruu.zero_index != ryu.zero_index ||
       std::abs(ruu.dt_s - ryu.dt_s) > 1e-12 * ruu.dt_s || !(ruu.dt_s > 0.0))
-    throw std::invalid_argument(
-        "mmfm: ruu and ryu must share size, zero_index and dt_s (> 0)");
+    throw std::invalid_argument("mmfm: ruu and ryu must share size, zero_index and dt_s (> 0)");
 }
 
 }  // namespace
@@ -107,8 +105,7 @@ const char* to_string(MmfmSolver solver) {
 
 double support_half_width_s(model::ModelOrder order, const MmfmSettings& settings) {
   if (settings.family == ModulatingFamily::kPolynomial) return 4.0 * settings.scale_s;
-  return hermite_half_width(settings.functions - 1 + std::max(order.n, order.m)) *
-         settings.scale_s;
+  return hermite_half_width(settings.functions - 1 + std::max(order.n, order.m)) * settings.scale_s;
 }
 
 std::vector<double> admissible_centres(const signal::Correlation& ruu,

@@ -1,11 +1,10 @@
 // Correlation-domain output-error refinement of an MMFM estimate.
-#include <algorithm>
-#include <cmath>
-#include <limits>
-
 #include <Eigen/Cholesky>
 #include <Eigen/LU>
 #include <Eigen/QR>
+#include <algorithm>
+#include <cmath>
+#include <limits>
 
 #include "rig/ident/mmfm.hpp"
 #include "rig/ident/srivc.hpp"
@@ -46,8 +45,8 @@ Eigen::MatrixXd project_out(const Eigen::MatrixXd& q, const Eigen::MatrixXd& x) 
 }  // namespace
 
 MmfmResult refine_correlation_output_error(const signal::Correlation& ruu,
-                                           const signal::Correlation& ryu,
-                                           const MmfmResult& start, bool delay_free) {
+                                           const signal::Correlation& ryu, const MmfmResult& start,
+                                           bool delay_free) {
   const model::TransferFunction m0 = model::monic(start.model);
   const int n = m0.order(), m = static_cast<int>(m0.num.size()) - 1;
   const Eigen::Index p = n + m + 1 + (delay_free ? 1 : 0);

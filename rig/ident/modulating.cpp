@@ -11,8 +11,8 @@ const char* to_string(ModulatingFamily family) {
 
 double hermite_half_width(int k) { return std::sqrt(2.0 * k + 1.0) + 4.5; }
 
-Eigen::MatrixXd hermite_functions(const Eigen::VectorXd& tau_s, double centre_s,
-                                  double scale_s, int count) {
+Eigen::MatrixXd hermite_functions(const Eigen::VectorXd& tau_s, double centre_s, double scale_s,
+                                  int count) {
   if (!(scale_s > 0.0) || count < 1)
     throw std::invalid_argument("hermite_functions: scale_s must be > 0 and count >= 1");
   const Eigen::Index rows = tau_s.size();

@@ -24,8 +24,8 @@ const char* to_string(ModulatingFamily family);
 double hermite_half_width(int k);
 
 // Columns k = 0..count-1 of exp(-x^2/2) He_k(x) at x = (tau - centre_s) / scale_s.
-Eigen::MatrixXd hermite_functions(const Eigen::VectorXd& tau_s, double centre_s,
-                                  double scale_s, int count);
+Eigen::MatrixXd hermite_functions(const Eigen::VectorXd& tau_s, double centre_s, double scale_s,
+                                  int count);
 
 // Columns i = 0..derivatives of d^i/dtau^i [x^N (1-x)^N], x = (tau - a)/(b - a), zero
 // outside [a, b].

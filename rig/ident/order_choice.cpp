@@ -1,5 +1,6 @@
 #include "rig/ident/order_choice.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
@@ -27,27 +28,39 @@ bool inside_band(const OrderCandidate& simple, const OrderCandidate& complex) {
 // A pole this many times faster than the fastest pole of the simpler model, added so that a
 // nested start has (almost) the simpler model's response and cost.
 constexpr double kNestedPoleFactor = 10.0;
+// A nested zero sits this much further out than the nested pole (never on it, where the two
+// would cancel and leave the fit degenerate).
+constexpr double kNestedZeroFactor = 2.0;
+// Steps of one pole or zero from the prior to a candidate order (4/1 from 2/0 takes 2).
+constexpr int kMaxNestingSteps = 4;
+// The spectra's lag half-width is the record length over this (Welch-like: about four
+// independent windows' worth of averaging at the resolution it gives).
+constexpr Eigen::Index kSpectrumRecordShare = 8;
 
 // The simpler model with one more pole (far above its own) or one more numerator
 // coefficient (zero): the richer structure started where the simpler one ended, so that its
 // fit can only improve on it.
-std::optional<model::TransferFunction> nested_start(const model::TransferFunction& simpler, model::ModelOrder order) {
+std::optional<model::TransferFunction> nested_start(const model::TransferFunction& simpler,
+                                                    model::ModelOrder order) {
   const model::TransferFunction m = model::monic(simpler);
   const int n = m.order(), nb = static_cast<int>(m.num.size()) - 1;
   if (order.n < n || order.m < nb || order.n - n > 1 || order.m - nb > 1) return std::nullopt;
   model::TransferFunction t = m;
+  const double fastest = m.poles().cwiseAbs().maxCoeff();
   if (order.n == n + 1) {
-    const double fastest = m.poles().cwiseAbs().maxCoeff();
     const double p = kNestedPoleFactor * std::max(fastest, 1.0);
     Eigen::VectorXd den = Eigen::VectorXd::Zero(n + 2);
-    den.head(n + 1) += m.den;  // s * A(s)
+    den.head(n + 1) += m.den;      // s * A(s)
     den.tail(n + 1) += p * m.den;  // + p A(s)
     t.den = den;
     t.num = p * m.num;
   }
   if (order.m == nb + 1) {
+    // A zero far above the poles (not a zero leading coefficient, which monic() trims).
+    const double z = kNestedZeroFactor * kNestedPoleFactor * std::max(fastest, 1.0);
     Eigen::VectorXd num = Eigen::VectorXd::Zero(nb + 2);
-    num.tail(nb + 1) = t.num;
+    num.head(nb + 1) += t.num / z;  // (s / z) B(s)
+    num.tail(nb + 1) += t.num;      // + B(s)
     t.num = num;
   }
   return model::monic(t);
@@ -56,10 +69,11 @@ std::optional<model::TransferFunction> nested_start(const model::TransferFunctio
 // Start models for one order: its previous fit, MMFM on the correlations, and the nested
 // extension of every simpler candidate already fitted.
 std::vector<model::TransferFunction> start_models(const signal::Correlation& ruu,
-                                           const signal::Correlation& ryu, model::ModelOrder order,
-                                           const OrderChoiceOptions& o,
-                                           const std::vector<OrderCandidate>& warm,
-                                           const std::vector<OrderCandidate>& simpler) {
+                                                  const signal::Correlation& ryu,
+                                                  model::ModelOrder order,
+                                                  const OrderChoiceOptions& o,
+                                                  const std::vector<OrderCandidate>& warm,
+                                                  const std::vector<OrderCandidate>& simpler) {
   std::vector<model::TransferFunction> starts;
   for (const auto& w : warm) {
     if (w.ok && w.order == order) starts.push_back(w.model);
@@ -82,11 +96,16 @@ std::vector<model::TransferFunction> start_models(const signal::Correlation& ruu
   if (o.prior) {
     std::optional<model::TransferFunction> t = model::monic(*o.prior);
     // Up one pole or one zero at a time until the order is reached.
-    while (t && !(model::ModelOrder{t->order(), static_cast<int>(t->num.size()) - 1} == order)) {
+    for (int step = 0;
+         t && step < kMaxNestingSteps &&
+         !(model::ModelOrder{t->order(), static_cast<int>(t->num.size()) - 1} == order);
+         ++step) {
       const model::ModelOrder now{t->order(), static_cast<int>(t->num.size()) - 1};
       t = nested_start(*t, {std::min(order.n, now.n + 1), std::min(order.m, now.m + 1)});
     }
-    if (t) starts.push_back(*t);
+    if (t && model::ModelOrder{t->order(), static_cast<int>(t->num.size()) - 1} == order) {
+      starts.push_back(*t);
+    }
   }
   return starts;
 }
@@ -106,10 +125,14 @@ OrderCandidate fit_one(const Eigen::VectorXd& u, const Eigen::VectorXd& y, doubl
       if (fit.cost < best_cost && fit.model.is_stable()) best_cost = fit.cost, c.model = fit.model;
     }
     if (!std::isfinite(best_cost)) throw std::runtime_error("no stable model");
-    const InputNoiseSpectra s = input_noise_spectra(u, y, dt_s, c.model, o.spectrum_half_width);
+    const int hw = std::clamp(static_cast<int>(u.size() / kSpectrumRecordShare),
+                              o.min_spectrum_half_width, o.max_spectrum_half_width);
+    const InputNoiseSpectra s =
+        input_noise_spectra(u, y, dt_s, c.model, hw, std::max(1024, 4 * hw));
     c.covariance = asymptotic_covariance(c.model, s, static_cast<double>(u.size()), delay_free);
     c.band = frf_uncertainty(c.model, c.covariance, o.compare_freqs_hz, delay_free);
-    c.width = worst_band95(c.band);
+    c.band_factor = simultaneous_factor95(c.model, c.covariance, o.compare_freqs_hz, delay_free);
+    c.width = worst_band95(c.band, c.band_factor);
     c.cost = best_cost;
     c.fit_pct = model::fit_percent(y, model::simulate(c.model, u, dt_s));
     c.ok = std::isfinite(c.width.db) && std::isfinite(c.width.deg);
@@ -138,7 +161,8 @@ int simplest_adequate(const std::vector<OrderCandidate>& cands) {
 }
 
 void widen_by_richer(OrderChoice& choice) {
-  OrderCandidate* best = choice.chosen < 0 ? nullptr : &choice.candidates[static_cast<std::size_t>(choice.chosen)];
+  OrderCandidate* best =
+      choice.chosen < 0 ? nullptr : &choice.candidates[static_cast<std::size_t>(choice.chosen)];
   if (best == nullptr) return;
   BandWidth95 w = best->width;
   for (const auto& c : choice.candidates) {
@@ -146,9 +170,9 @@ void widen_by_richer(OrderChoice& choice) {
     for (std::size_t i = 0; i < best->band.size() && i < c.band.size(); ++i) {
       const auto& b = best->band[i];
       const auto& r = c.band[i];
-      w.db = std::max(w.db, std::abs(b.mag_db - r.mag_db) + kZ95 * r.sd_db);
+      w.db = std::max(w.db, std::abs(b.mag_db - r.mag_db) + c.band_factor * r.sd_db);
       w.deg = std::max(w.deg, std::abs(std::remainder(b.phase_deg - r.phase_deg, 360.0)) +
-                                  kZ95 * r.sd_deg);
+                                  c.band_factor * r.sd_deg);
     }
   }
   best->width = w;

@@ -8,24 +8,23 @@
 // from the averaged correlations when there is none) and every simpler candidate extended by
 // a far pole or a zero (a nested start, so that a richer structure never ends worse than a
 // simpler one by a poor local minimum), and a prior model (the pilot's) when one is given:
-// with a periodic excitation MMFM alone can start a second order in the wrong basin. Each has its asymptotic covariance and 95 % band
-// (frf_uncertainty.hpp). The rule: take the simplest candidate whose response lies inside
-// the 95 % band of every more complex candidate at every compare frequency, in magnitude and
-// in phase (more structure does not change the response detectably). A candidate that fails
-// or is unstable takes no part.
+// with a periodic excitation MMFM alone can start a second order in the wrong basin. Each has its
+// asymptotic covariance and 95 % band (frf_uncertainty.hpp). The rule: take the simplest candidate
+// whose response lies inside the 95 % band of every more complex candidate at every compare
+// frequency, in magnitude and in phase (more structure does not change the response detectably). A
+// candidate that fails or is unstable takes no part.
 //
 // The chosen model's band must also hold when the simpler structure is biased: its width is
-// the larger of its own 95 % band and, at each frequency, its distance from every richer
-// candidate plus that candidate's 95 % band (the truth lies in the richer band; the chosen
+// the larger of its own band and, at each frequency, its distance from every richer
+// candidate plus that candidate's band (the truth lies in the richer band; the chosen
 // model is that far from it). So the stopping rule cannot be met by a structure whose
 // error the data already show.
 #pragma once
 
+#include <Eigen/Core>
 #include <optional>
 #include <string>
 #include <vector>
-
-#include <Eigen/Core>
 
 #include "rig/ident/frf_uncertainty.hpp"
 #include "rig/ident/mmfm.hpp"
@@ -37,28 +36,32 @@ namespace rig::ident {
 struct OrderCandidate {
   model::ModelOrder order;
   bool ok = false;
-  std::string error;              // why not, when !ok
-  model::TransferFunction model;         // monic, with the delay
-  Eigen::MatrixXd covariance;     // asymptotic, of [a_{n-1}..a_0, b_m..b_0 (, Td)]
+  std::string error;                 // why not, when !ok
+  model::TransferFunction model;     // monic, with the delay
+  Eigen::MatrixXd covariance;        // asymptotic, of [a_{n-1}..a_0, b_m..b_0 (, Td)]
   std::vector<FrfUncertainty> band;  // at the compare frequencies
-  BandWidth95 width;              // widest 95 % half-band (chosen: widened, see above)
-  double cost = 0.0;              // mean square output error on the record
-  double fit_pct = 0.0;           // output-error fit on the record
+  double band_factor = 0.0;          // simultaneous 95 % factor over the compare frequencies
+  BandWidth95 width;                 // widest simultaneous 95 % half-band (chosen: widened)
+  double cost = 0.0;                 // mean square output error on the record
+  double fit_pct = 0.0;              // output-error fit on the record
 };
 
 struct OrderChoiceOptions {
   std::vector<model::ModelOrder> orders = {{2, 0}, {3, 0}, {3, 1}};
-  std::optional<double> delay_s;        // nullopt: estimated
+  std::optional<double> delay_s;         // nullopt: estimated
   std::vector<double> compare_freqs_hz;  // where the response is judged
-  MmfmOptions mmfm;                     // start estimates (order, delay and refine overridden)
+  MmfmOptions mmfm;                      // start estimates (order, delay and refine overridden)
   // A model known beforehand (the pilot's): one more start for every order, nested up to it.
   std::optional<model::TransferFunction> prior;
-  int spectrum_half_width = 256;        // lag window of the spectra (samples)
+  // Lag window of the spectra (samples): record / kSpectrumRecordShare within these bounds,
+  // so that a long record resolves narrow noise lines (the firing ripple) in Phi_v.
+  int min_spectrum_half_width = 256;
+  int max_spectrum_half_width = 2048;
 };
 
 struct OrderChoice {
   std::vector<OrderCandidate> candidates;  // in the order of options.orders
-  int chosen = -1;                          // index into candidates, -1 when none fitted
+  int chosen = -1;                         // index into candidates, -1 when none fitted
   const OrderCandidate* best() const {
     return chosen < 0 ? nullptr : &candidates[static_cast<std::size_t>(chosen)];
   }

@@ -1,11 +1,10 @@
 #include "rig/ident/output_error.hpp"
 
+#include <Eigen/Cholesky>
 #include <algorithm>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
-
-#include <Eigen/Cholesky>
 
 #include "rig/ident/srivc.hpp"
 
@@ -25,8 +24,8 @@ model::TransferFunction from_theta(const Eigen::VectorXd& th, int n, int m) {
   return tf;
 }
 
-double cost_of(const model::TransferFunction& tf, const Eigen::VectorXd& u, const Eigen::VectorXd& y,
-               double dt_s) {
+double cost_of(const model::TransferFunction& tf, const Eigen::VectorXd& u,
+               const Eigen::VectorXd& y, double dt_s) {
   if (!tf.is_stable() || tf.delay_s < 0.0) return std::numeric_limits<double>::infinity();
   const double v = (y - model::simulate(tf, u, dt_s)).squaredNorm() / static_cast<double>(y.size());
   return std::isfinite(v) ? v : std::numeric_limits<double>::infinity();
@@ -34,10 +33,10 @@ double cost_of(const model::TransferFunction& tf, const Eigen::VectorXd& u, cons
 
 }  // namespace
 
-OutputErrorFit refine_output_error(const Eigen::VectorXd& u, const Eigen::VectorXd& y,
-                                   double dt_s, const model::TransferFunction& start,
-                                   bool delay_free) {
-  if (u.size() != y.size()) throw std::invalid_argument("refine_output_error: u and y lengths differ");
+OutputErrorFit refine_output_error(const Eigen::VectorXd& u, const Eigen::VectorXd& y, double dt_s,
+                                   const model::TransferFunction& start, bool delay_free) {
+  if (u.size() != y.size())
+    throw std::invalid_argument("refine_output_error: u and y lengths differ");
   if (!start.is_proper()) throw std::invalid_argument("refine_output_error: improper start model");
   const model::TransferFunction m0 = model::monic(start);
   const int n = m0.order(), m = static_cast<int>(m0.num.size()) - 1;

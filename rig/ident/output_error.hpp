@@ -13,15 +13,14 @@ namespace rig::ident {
 
 struct OutputErrorFit {
   model::TransferFunction model;  // monic
-  double cost = 0.0;       // mean square residual
+  double cost = 0.0;              // mean square residual
   int iterations = 0;
-  bool improved = false;   // the start was improved (else model == model::monic(start))
+  bool improved = false;  // the start was improved (else model == model::monic(start))
 };
 
 // Throws std::invalid_argument for unequal lengths or an improper start. A start that is
 // unstable is returned unchanged (improved = false).
-OutputErrorFit refine_output_error(const Eigen::VectorXd& u, const Eigen::VectorXd& y,
-                                   double dt_s, const model::TransferFunction& start,
-                                   bool delay_free);
+OutputErrorFit refine_output_error(const Eigen::VectorXd& u, const Eigen::VectorXd& y, double dt_s,
+                                   const model::TransferFunction& start, bool delay_free);
 
 }  // namespace rig::ident

@@ -4,12 +4,11 @@
 #define FMT_HEADER_ONLY
 #include <fmt/format.h>
 
+#include <Eigen/Cholesky>
 #include <algorithm>
 #include <cmath>
 #include <numbers>
 #include <stdexcept>
-
-#include <Eigen/Cholesky>
 
 namespace rig::ident {
 namespace {
@@ -94,7 +93,8 @@ void check_clipping(const VectorXd& x, const char* channel, const QualityOptions
   rep.figures.emplace_back(std::string(channel) + "_clip_fraction", worst);
   // A two-level signal (PRBS) lives at its extremes by design.
   if (hi == lo || f_hi + f_lo > 0.9 || worst < o.clip_warning) return;
-  add(rep, std::string(channel) + "_clipped", worst >= o.clip_fatal ? Severity::kFatal : Severity::kWarning,
+  add(rep, std::string(channel) + "_clipped",
+      worst >= o.clip_fatal ? Severity::kFatal : Severity::kWarning,
       fmt::format("{:.1f} % of the {} samples sit at its {} ({:.6g}): the channel is clipped or "
                   "saturated; reduce the excitation amplitude or check the transducer range.",
                   100.0 * worst, channel, f_hi >= f_lo ? "maximum" : "minimum",
@@ -121,7 +121,8 @@ void check_coupled_pairs(double dt_s, const QualityOptions& o, QualityReport& re
     if (std::isfinite(rc)) rcs.emplace_back(p.name, rc);
   }
   if (rcs.size() >= 2) {
-    const auto [mn, mx] = std::minmax_element(rcs.begin(), rcs.end(), [](auto& a, auto& b) { return a.second < b.second; });
+    const auto [mn, mx] = std::minmax_element(rcs.begin(), rcs.end(),
+                                              [](auto& a, auto& b) { return a.second < b.second; });
     if (mx->second / mn->second - 1.0 > o.coupling_tolerance) {
       add(rep, "coupling_mismatch", Severity::kFatal,
           fmt::format("The AC-coupling time constants of the channels differ ({} {:.3g} s, {} "
@@ -182,11 +183,12 @@ void check_sag(const VectorXd& h, Index z, const QualityOptions& o, QualityRepor
   rep.figures.emplace_back("step_tail_ratio", step_tail);
   if (step_tail < o.sag_ratio && !rep.find("coupling_mismatch")) {
     add(rep, "coupling_mismatch", Severity::kWarning,
-        fmt::format("The step response derived from the data falls back to {:.0f} % of its "
-                    "peak within the window (a slow opposite-sign tail): the output is probably "
-                    "AC coupled without a matched network on the input{}.",
-                    100.0 * step_tail,
-                    o.coupling_rc_s ? fmt::format(" (declared RC {:.3g} s)", *o.coupling_rc_s) : ""),
+        fmt::format(
+            "The step response derived from the data falls back to {:.0f} % of its "
+            "peak within the window (a slow opposite-sign tail): the output is probably "
+            "AC coupled without a matched network on the input{}.",
+            100.0 * step_tail,
+            o.coupling_rc_s ? fmt::format(" (declared RC {:.3g} s)", *o.coupling_rc_s) : ""),
         step_tail, o.sag_ratio);
   }
 }
@@ -244,10 +246,11 @@ void check_excitation(const Correlations& c, const QualityOptions& o, QualityRep
   rep.figures.emplace_back("required_lines", required);
   if (lines >= required) return;
   add(rep, "not_persistently_exciting", Severity::kFatal,
-      fmt::format("The input excites only about {:.1f} independent frequencies, but a {}/{} model{} "
-                  "needs at least {}: use a broadband excitation (filtered noise or PRBS) or ask "
-                  "for a lower order.",
-                  lines, o.order.n, o.order.m, o.delay_estimated ? " with a delay" : "", required),
+      fmt::format(
+          "The input excites only about {:.1f} independent frequencies, but a {}/{} model{} "
+          "needs at least {}: use a broadband excitation (filtered noise or PRBS) or ask "
+          "for a lower order.",
+          lines, o.order.n, o.order.m, o.delay_estimated ? " with a delay" : "", required),
       lines, required);
 }
 
@@ -284,14 +287,17 @@ double fitted_coupling_rc_s(const VectorXd& raw, const VectorXd& coupled, double
 QualityReport check_quality(const VectorXd& u, const VectorXd& y, double dt_s,
                             const QualityOptions& options) {
   if (u.size() != y.size()) {
-    throw std::invalid_argument(fmt::format("quality: input has {} samples, output {}", u.size(), y.size()));
+    throw std::invalid_argument(
+        fmt::format("quality: input has {} samples, output {}", u.size(), y.size()));
   }
   if (!(dt_s > 0.0)) throw std::invalid_argument("quality: dt_s must be > 0");
   signal::CorrelatorOptions opt = options.correlator;
   opt.dt_s = dt_s;
   if (u.size() < 4 * opt.lags) {
-    throw std::invalid_argument(fmt::format("quality: {} samples are too few for a lag window of "
-                                            "{} (need at least {})", u.size(), opt.lags, 4 * opt.lags));
+    throw std::invalid_argument(
+        fmt::format("quality: {} samples are too few for a lag window of "
+                    "{} (need at least {})",
+                    u.size(), opt.lags, 4 * opt.lags));
   }
   QualityReport rep;
   check_sampling(dt_s, options, rep);

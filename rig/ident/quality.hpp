@@ -36,7 +36,7 @@ const char* to_string(Severity severity);
 struct QualityFlag {
   std::string name;
   Severity severity = Severity::kWarning;
-  std::string message;  // one sentence, says what to check
+  std::string message;                                          // one sentence, says what to check
   double value = std::numeric_limits<double>::quiet_NaN();      // the measured figure
   double threshold = std::numeric_limits<double>::quiet_NaN();  // the limit it crossed
 };
@@ -56,17 +56,17 @@ struct QualityOptions {
   double significance_sigma = 5.0;       // no_response: peak / Bartlett std below this
   double acausal_warning = 0.25;         // fraction of |h|^2 at negative lags
   double acausal_fatal = 0.5;
-  double clip_warning = 0.005;           // fraction of samples at one extreme
+  double clip_warning = 0.005;  // fraction of samples at one extreme
   double clip_fatal = 0.05;
-  double undecayed_ratio = 0.3;          // tail |r_yu| / peak |r_yu|
-  double sag_ratio = 0.2;                // step-response tail / peak below this: sag
+  double undecayed_ratio = 0.3;  // tail |r_yu| / peak |r_yu|
+  double sag_ratio = 0.2;        // step-response tail / peak below this: sag
   // Coupling declared in the sidecar, and coupled channels with their raw sources.
   std::optional<double> coupling_rc_s;
   std::vector<CoupledPair> coupled_pairs;
-  double coupling_tolerance = 0.1;       // relative RC difference
+  double coupling_tolerance = 0.1;  // relative RC difference
   // Time-stamp jitter from the recording (0 when it had no time column).
   double jitter_max_s = 0.0;
-  double jitter_warning = 0.01;          // |step - dt| / dt
+  double jitter_warning = 0.01;  // |step - dt| / dt
   double jitter_fatal = 0.25;
 };
 

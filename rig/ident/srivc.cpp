@@ -1,14 +1,13 @@
 // SRIVC (Young 1976; Garnier, Mensler and Richard 2003; CONTSID srivc).
 #include "rig/ident/srivc.hpp"
 
+#include <Eigen/LU>
+#include <Eigen/QR>
 #include <algorithm>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
 #include <string>
-
-#include <Eigen/LU>
-#include <Eigen/QR>
 
 namespace rig::ident {
 namespace {
@@ -180,8 +179,7 @@ FixedDelayFit search_delay(const Eigen::VectorXd& u, const Eigen::VectorXd& y, d
   for (const FixedDelayFit* f : {&f1, &f2})
     if (f->sse < best.sse) best = *f;
   if (!std::isfinite(best.sse)) return best;  // no stable fit at any delay
-  const FixedDelayFit final_fit =
-      srivc_fixed(u, y, dt_s, order, best.tf.delay_s, best.tf.den, opt);
+  const FixedDelayFit final_fit = srivc_fixed(u, y, dt_s, order, best.tf.delay_s, best.tf.den, opt);
   return final_fit.sse <= best.sse ? final_fit : best;
 }
 

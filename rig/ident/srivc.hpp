@@ -23,8 +23,8 @@ struct SrivcOptions {
   std::optional<double> delay_s;  // nullopt: searched over [0, max_delay_s]
   double max_delay_s = 0.5;
   int max_iterations = 30;
-  double tolerance = 1e-7;        // relative parameter change that ends the iteration
-  double svf_cutoff_rad_s = -1;   // initial filter (p + lambda)^n; < 0: automatic
+  double tolerance = 1e-7;       // relative parameter change that ends the iteration
+  double svf_cutoff_rad_s = -1;  // initial filter (p + lambda)^n; < 0: automatic
 };
 
 struct SrivcResult {
@@ -34,8 +34,8 @@ struct SrivcResult {
   double delay_s = 0.0;
   double delay_std_s = 0.0;
   DerivedFigures derived;
-  double noise_variance = 0.0;                // output-error residual variance
-  double fit_pct = 0.0;                       // output-error fit on the data used
+  double noise_variance = 0.0;  // output-error residual variance
+  double fit_pct = 0.0;         // output-error fit on the data used
   int iterations = 0;
   bool converged = false;
 };

@@ -38,7 +38,8 @@ void correct_delay(std::vector<ident::ParameterEstimate>& parameters, double& de
 }
 
 // The sample-timing correction, applied once to everything the excitation yields: the live
-// estimates, the final model and its candidate structures, and H1 (docs/decisions.md, "Sample timing correction").
+// estimates, the final model and its candidate structures, and H1 (docs/decisions.md, "Sample
+// timing correction").
 void correct_timing(ExcitationResult& out, double correction_s) {
   for (auto& h : out.history) {
     correct_delay(h.parameters, h.delay_s, correction_s);

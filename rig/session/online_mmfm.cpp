@@ -42,7 +42,8 @@ std::pair<Eigen::MatrixXd, double> parameter_covariance(const ident::OrderCandid
 OnlineMmfm::OnlineMmfm(const OnlineMmfmOptions& options)
     : options_(options), main_(streaming(options)) {
   if (options_.orders.empty()) options_.orders = {options_.order};
-  if (options_.compare_freqs_hz.empty()) options_.compare_freqs_hz = ident::log_frequencies_hz(0.5, 5.0, 24);
+  if (options_.compare_freqs_hz.empty())
+    options_.compare_freqs_hz = ident::log_frequencies_hz(0.5, 5.0, 24);
   if (options.ac_coupling_rc_s > 0.0) {
     couple_u_.emplace(options.correlator.dt_s, options.ac_coupling_rc_s);
     couple_y_.emplace(options.correlator.dt_s, options.ac_coupling_rc_s);
@@ -148,12 +149,13 @@ BlockEstimate OnlineMmfm::refresh(const Snapshot& s) {
   e.t_s = s.t_s;
   e.band_db95 = e.band_deg95 = e.fit_pct = kNaN;
   try {
-    ident::OrderChoice choice =
-        ident::choose_order(s.u, s.y, options_.correlator.dt_s, s.ruu, s.ryu, choice_options(), warm_);
+    ident::OrderChoice choice = ident::choose_order(s.u, s.y, options_.correlator.dt_s, s.ruu,
+                                                    s.ryu, choice_options(), warm_);
     for (const auto& c : choice.candidates) {
       if (!c.ok) continue;
       if (c.order == model::ModelOrder{2, 0}) {
-        e.derived = ident::derived_figures(c.model, parameter_covariance(c, !options_.delay_s).first);
+        e.derived =
+            ident::derived_figures(c.model, parameter_covariance(c, !options_.delay_s).first);
       }
     }
     warm_ = choice.candidates;

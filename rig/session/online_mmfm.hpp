@@ -43,18 +43,18 @@ inline const std::vector<model::ModelOrder> kAutoOrders = {{2, 0}, {3, 0}, {3, 1
 inline constexpr int kCompareFrequencies = 24;
 
 struct OnlineMmfmOptions {
-  model::ModelOrder order;             // the structure when `orders` is empty
+  model::ModelOrder order;                // the structure when `orders` is empty
   std::vector<model::ModelOrder> orders;  // candidates, simplest first (automatic order)
-  std::optional<double> delay_s;       // nullopt: estimated
+  std::optional<double> delay_s;          // nullopt: estimated
   signal::CorrelatorOptions correlator;
   Eigen::Index block_samples = 1024;
-  bool exponential = false;            // else cumulative
-  double weight = 8.0;                 // W of the exponential average
-  double ac_coupling_rc_s = 0.0;       // 0: no coupling
+  bool exponential = false;              // else cumulative
+  double weight = 8.0;                   // W of the exponential average
+  double ac_coupling_rc_s = 0.0;         // 0: no coupling
   std::vector<double> compare_freqs_hz;  // where the stopping rule judges the response
-  double target_db = 0.5;              // 95 % band half-widths of the stopping rule
+  double target_db = 0.5;                // 95 % band half-widths of the stopping rule
   double target_deg = 3.0;
-  bool asynchronous = false;  // estimate on a worker thread (else inside push())
+  bool asynchronous = false;                     // estimate on a worker thread (else inside push())
   std::optional<model::TransferFunction> prior;  // a start model for every order (pilot's)
 };
 
@@ -62,16 +62,16 @@ struct OnlineMmfmOptions {
 struct BlockEstimate {
   double t_s = 0.0;  // excitation time at the end of the block
   int block = 0;
-  bool ok = false;                                   // false: the estimator failed on this block
-  std::string error;                                 // why, when !ok
-  model::TransferFunction model;                     // the chosen structure, monic, with delay
+  bool ok = false;                // false: the estimator failed on this block
+  std::string error;              // why, when !ok
+  model::TransferFunction model;  // the chosen structure, monic, with delay
   model::ModelOrder order;
   std::vector<ident::ParameterEstimate> parameters;  // with asymptotic standard errors
   ident::DerivedFigures derived;  // gain, fn, zeta with se of the second-order candidate
   double delay_s = 0.0;
-  double band_db95 = 0.0;   // widest 95 % half-band over the compare frequencies (NaN: unknown)
+  double band_db95 = 0.0;  // widest 95 % half-band over the compare frequencies (NaN: unknown)
   double band_deg95 = 0.0;
-  double fit_pct = 0.0;     // output-error fit on the record
+  double fit_pct = 0.0;  // output-error fit on the record
 };
 
 class OnlineMmfm {
@@ -120,7 +120,7 @@ class OnlineMmfm {
   std::vector<double> u_, y_;         // coupled record (exponential: the last N_eff samples)
   Eigen::Index in_block_ = 0;
   int blocks_done_ = 0;
-  std::vector<ident::OrderCandidate> warm_;  // latest fits per order (worker's state)
+  std::vector<ident::OrderCandidate> warm_;        // latest fits per order (worker's state)
   std::optional<ident::OrderChoice> last_choice_;  // of the latest finished estimate
   std::vector<BlockEstimate> history_;
   std::optional<Snapshot> pending_;  // asynchronous: blocks awaiting the worker

@@ -43,15 +43,16 @@ model::TransferFunction pilot_model(const std::vector<double>& u_raw,
 }
 
 struct Lines {
-  std::vector<double> w_rad;             // per sample
-  std::vector<double> out_amp, in_amp;   // output and input amplitudes at scale 1
-  std::vector<double> gain_phase;        // arg G
+  std::vector<double> w_rad;            // per sample
+  std::vector<double> out_amp, in_amp;  // output and input amplitudes at scale 1
+  std::vector<double> gain_phase;       // arg G
 };
 
 Lines plan_lines(const model::TransferFunction& g, const ShapedLimits& l, ShapedDesign& d) {
   const double f0 = 1.0 / (kShapedPeriodSamples * l.dt_s);
   const int k_lo = std::max(1, static_cast<int>(std::ceil(l.f_lo_hz / f0)));
-  const int k_hi = std::min(kShapedPeriodSamples / 2 - 1, static_cast<int>(std::floor(l.f_hi_hz / f0)));
+  const int k_hi =
+      std::min(kShapedPeriodSamples / 2 - 1, static_cast<int>(std::floor(l.f_hi_hz / f0)));
   Lines s;
   std::vector<double> mags;
   for (int k = k_lo; k <= k_hi; ++k) {
@@ -109,7 +110,9 @@ std::vector<double> low_crest_phases(const Lines& s, std::uint64_t seed) {
   return best;
 }
 
-double rms(const Eigen::VectorXd& x) { return std::sqrt(x.squaredNorm() / static_cast<double>(x.size())); }
+double rms(const Eigen::VectorXd& x) {
+  return std::sqrt(x.squaredNorm() / static_cast<double>(x.size()));
+}
 
 }  // namespace
 

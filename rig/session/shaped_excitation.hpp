@@ -21,11 +21,10 @@
 // margin) instead of a Gaussian's 4 for its statistical cap.
 #pragma once
 
+#include <Eigen/Core>
 #include <cstdint>
 #include <string>
 #include <vector>
-
-#include <Eigen/Core>
 
 #include "rig/model/transfer_function.hpp"
 
@@ -49,14 +48,14 @@ struct ShapedLimits {
 
 struct ShapedDesign {
   bool ok = false;
-  std::string reason;            // why not, when !ok
+  std::string reason;  // why not, when !ok
   model::TransferFunction pilot_model;
-  Eigen::VectorXd period_pct;    // one period of the excitation, scaled (% of rated power)
+  Eigen::VectorXd period_pct;  // one period of the excitation, scaled (% of rated power)
   int lines = 0;
   double f_lo_hz = 0.0, f_hi_hz = 0.0;
-  double std_pct = 0.0;          // of the scaled excitation
-  double input_crest = 0.0;      // peak / rms of the input
-  double output_crest = 0.0;     // peak / rms of the predicted output
+  double std_pct = 0.0;            // of the scaled excitation
+  double input_crest = 0.0;        // peak / rms of the input
+  double output_crest = 0.0;       // peak / rms of the predicted output
   double predicted_peak_kw = 0.0;  // margin * output peak + 3 noise std
   bool limited_by_clamp = false;
 };

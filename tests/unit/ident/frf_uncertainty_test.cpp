@@ -3,13 +3,14 @@
 // time-domain output error on a second order plus dead time like the
 // Stornoway set, Gaussian excitation, white plus low-frequency coloured output noise.
 // The estimate is MMFM refined by the time-domain output error (output_error.hpp).
+#include "rig/ident/frf_uncertainty.hpp"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <cstdio>
 #include <vector>
 
-#include "rig/ident/frf_uncertainty.hpp"
 #include "rig/ident/mmfm.hpp"
 #include "rig/ident/output_error.hpp"
 #include "rig/signal/correlators.hpp"
@@ -86,7 +87,7 @@ TEST(FrfUncertainty, GradientMatchesFiniteDifferences) {
     if (i < 2) p.den(1 + i) += h * std::max(1.0, std::abs(tf.den(1 + i)));
     if (i == 2) p.num(0) += h * tf.num(0);
     if (i == 3) p.delay_s += h;
-    const double step = i < 2 ? h * std::max(1.0, std::abs(tf.den(1 + i)))
+    const double step = i < 2    ? h * std::max(1.0, std::abs(tf.den(1 + i)))
                         : i == 2 ? h * tf.num(0)
                                  : h;
     const std::complex<double> fd = (p.response(f) - tf.response(f)) / step;
@@ -124,8 +125,7 @@ TEST(FrfUncertainty, BandMatchesMonteCarloSpreadAndCoversTheTruth) {
     for (std::size_t i = 0; i < freqs.size(); ++i) {
       const std::complex<double> gt = truth.response(freqs[i]);
       const double e_db = r.band[i].mag_db - 20.0 * std::log10(std::abs(gt));
-      const double e_deg =
-          std::remainder(r.band[i].phase_deg - 180.0 / kPi * std::arg(gt), 360.0);
+      const double e_deg = std::remainder(r.band[i].phase_deg - 180.0 / kPi * std::arg(gt), 360.0);
       sum_db[i] += e_db;
       sum2_db[i] += e_db * e_db;
       sum2_deg[i] += e_deg * e_deg;
@@ -139,9 +139,10 @@ TEST(FrfUncertainty, BandMatchesMonteCarloSpreadAndCoversTheTruth) {
   }
   for (std::size_t i = 0; i < freqs.size(); ++i) {
     const double rms_db = std::sqrt(sum2_db[i] / kRuns), rms_deg = std::sqrt(sum2_deg[i] / kRuns);
-    std::printf("f %.1f Hz: rms error %.3f dB %.2f deg, predicted sd %.3f dB %.2f deg\n",
-                freqs[i], rms_db, rms_deg, pred_db[i], pred_deg[i]);
-    // The asymptotic band describes the spread within a factor of 1.4 either way (measured: 0.96-1.18).
+    std::printf("f %.1f Hz: rms error %.3f dB %.2f deg, predicted sd %.3f dB %.2f deg\n", freqs[i],
+                rms_db, rms_deg, pred_db[i], pred_deg[i]);
+    // The asymptotic band describes the spread within a factor of 1.4 either way (measured:
+    // 0.96-1.18).
     EXPECT_GT(pred_db[i], rms_db / 1.4) << freqs[i] << " Hz";
     EXPECT_LT(pred_db[i], rms_db * 1.4) << freqs[i] << " Hz";
     EXPECT_GT(pred_deg[i], rms_deg / 1.4) << freqs[i] << " Hz";

@@ -2,13 +2,14 @@
 // Stornoway-like second order plus dead time, then checked by simulating the plant with it:
 // the output stays inside the planned part of the band, its spectrum is flat over the lines,
 // its crest factor is low, and the input respects the clamp.
+#include "rig/session/shaped_excitation.hpp"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <complex>
 #include <vector>
 
-#include "rig/session/shaped_excitation.hpp"
 #include "rig/signal/excitation.hpp"
 #include "rig/signal/random.hpp"
 
@@ -39,7 +40,8 @@ void pilot(std::vector<double>& u, std::vector<double>& y) {
   signal::Xoshiro256 rng(6);
   u.assign(ue.begin(), ue.end());
   y.resize(u.size());
-  for (std::size_t i = 0; i < y.size(); ++i) y[i] = ye(static_cast<Eigen::Index>(i)) + 5.0 * rng.normal();
+  for (std::size_t i = 0; i < y.size(); ++i)
+    y[i] = ye(static_cast<Eigen::Index>(i)) + 5.0 * rng.normal();
 }
 
 ShapedLimits limits() {
@@ -77,7 +79,8 @@ TEST(ShapedExcitation, FillsThePlannedBandWithAFlatLowCrestOutput) {
   for (int k = static_cast<int>(std::ceil(0.3 / f0)); k <= static_cast<int>(4.0 / f0); ++k) {
     std::complex<double> c = 0.0;
     for (Eigen::Index t = 0; t < last.size(); ++t) {
-      c += last(t) * std::polar(1.0, -2.0 * M_PI * k * static_cast<double>(t) / kShapedPeriodSamples);
+      c += last(t) *
+           std::polar(1.0, -2.0 * M_PI * k * static_cast<double>(t) / kShapedPeriodSamples);
     }
     amp.push_back(std::abs(c));
   }
