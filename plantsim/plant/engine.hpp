@@ -40,6 +40,12 @@ class FuelDelayLine {
   FuelDelayLine(double dt_s, double max_delay_s, double initial_pu);
   void push(double t_s, double rack_pu);  // t_s advances by dt_s per push
   double at(double t_s) const;            // rack(t_s); clamped to the stored span
+  double newest_time_s() const { return t_newest_s_; }
+  double dt_s() const { return dt_s_; }
+  // The sample `back` ticks before the newest one (taken at newest_time_s() - back dt_s()).
+  double sample(std::size_t back) const {
+    return ring_[(head_ + ring_.size() - back) % ring_.size()];
+  }
 
  private:
   double dt_s_;

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 namespace plantsim {
 namespace {
@@ -19,6 +20,7 @@ SolverOptions solver_options(const Params& p) {
   SolverOptions o;
   o.rtol = p[P::kSolverRtol];
   o.atol = p[P::kSolverAtol];
+  o.atol_scale = GensetModel::atol_scale(p);
   return o;
 }
 
@@ -61,10 +63,54 @@ GensetPlant::GensetPlant(const Params& params, std::vector<TimedChange> changes,
   update_measurement();
 }
 
-void GensetPlant::restart_solver(double t_s) {
+void GensetPlant::restart_solver(double t_s, bool try_engine_path) {
+  const EnginePath::State engine{x_[GensetModel::kEng + Engine::kTorque],
+                                 x_[GensetModel::kEng + Engine::kBoost]};
+  const bool path = try_engine_path && EnginePath::usable(model_.params(), dt_s_) &&
+                    engine_path_.anchor(model_.params(), t_s, engine, *delay_);
+  model_.set_engine_path(path ? &engine_path_ : nullptr);
+  ode_engine_ticks_ = 0;
   model_.set_frozen(x_);
   const int n = GensetModel::active_size(model_.params());
   solver_ = std::make_unique<CvodeSolver>(model_, t_s, x_.head(n), solver_options(model_.params()));
+}
+
+void GensetPlant::sync_state() {
+  x_.head(solver_->state().size()) = solver_->state();
+  if (model_.engine_path() == nullptr) return;
+  const EnginePath::State e = engine_path_.at(solver_->time());
+  x_[GensetModel::kEng + Engine::kTorque] = e.torque_pu;
+  x_[GensetModel::kEng + Engine::kBoost] = e.boost_pu;
+}
+
+// With the engine in the ODE after a clamp acted, tries the closed form again now and then;
+// only a path that holds up to the newest corner restarts the solver.
+void GensetPlant::retry_engine_path() {
+  if (model_.engine_path() != nullptr || ++ode_engine_ticks_ < kEngineRetryTicks) return;
+  ode_engine_ticks_ = 0;
+  const EnginePath::State engine{x_[GensetModel::kEng + Engine::kTorque],
+                                 x_[GensetModel::kEng + Engine::kBoost]};
+  if (EnginePath::usable(model_.params(), dt_s_) &&
+      engine_path_.anchor(model_.params(), solver_->time(), engine, *delay_)) {
+    restart_solver(solver_->time());
+  }
+}
+
+// How far CVODE may step: to the end of the tick, or with look-ahead as far as the fuel is
+// known (t_now + Td), and with the engine in closed form no further than its newest knot.
+double GensetPlant::horizon_s(double t_now, double t_end, bool look_ahead) const {
+  double h = look_ahead ? t_now + dead_time_s(model_.params()) : t_end;
+  if (model_.engine_path() != nullptr) h = std::min(h, engine_path_.valid_until_s());
+  return std::max(h, t_end);
+}
+
+// Where the closed-form engine stops holding (a clamp acts beyond it): the engine returns to
+// the ODE there. Infinity while it holds or the ODE already has the engine.
+double GensetPlant::engine_handback_s() const {
+  if (model_.engine_path() == nullptr || engine_path_.valid()) {
+    return std::numeric_limits<double>::infinity();
+  }
+  return engine_path_.valid_until_s();
 }
 
 void GensetPlant::reconfigure() {
@@ -120,18 +166,26 @@ bool GensetPlant::advance_solver(double t_now, double t_end) {
   }
   model_.set_bias_pu(bias_pu);
   const bool look_ahead = split || quiet_ticks_ >= kLookAheadAfterTicks;
-  const double horizon = look_ahead ? t_now + dead_time_s(model_.params()) : t_end;
+  constexpr double kNever = std::numeric_limits<double>::infinity();
   double t_seg = t_now;
   try {
-    while (next_change_ < changes_.size() && changes_[next_change_].time_s <= t_end) {
-      const double t_change = std::max(changes_[next_change_].time_s, t_now);
-      solver_->advance_to(t_change, horizon);
+    for (;;) {
+      const bool change = next_change_ < changes_.size();
+      const double t_change = change ? std::max(changes_[next_change_].time_s, t_now) : kNever;
+      const double t_handback = engine_handback_s();
+      const double t_event = std::min(t_change, t_handback);
+      if (t_event > t_end) break;
+      solver_->advance_to(t_event, horizon_s(t_now, t_event, look_ahead));
       sync_state();
-      advance_bias_path(t_change - t_seg);
-      t_seg = t_change;
-      apply(changes_[next_change_++]);
+      advance_bias_path(t_event - t_seg);
+      t_seg = t_event;
+      if (t_handback <= t_change) {
+        restart_solver(t_event, false);
+      } else {
+        apply(changes_[next_change_++]);
+      }
     }
-    solver_->advance_to(t_end, horizon);
+    solver_->advance_to(t_end, horizon_s(t_now, t_end, look_ahead));
     sync_state();
   } catch (const SolverError& e) {
     error_ = e.what();
@@ -145,6 +199,8 @@ void GensetPlant::step() {
   if (last_.fault) return;  // a failed solver stays failed; the servers report it
   const double t_now = static_cast<double>(ticks_) * dt_s_;
   const double t_end = t_now + dt_s_;
+  retry_engine_path();
+  engine_path_.prune(t_now);
   if (!advance_solver(t_now, t_end)) {
     last_.fault = true;
     return;
@@ -160,6 +216,7 @@ void GensetPlant::step() {
   }
   const double rack = backlash_.update(actuator_pu_, p[P::kGovBacklash]);
   delay_->push(t_end, rack);
+  if (model_.engine_path() != nullptr) engine_path_.extend(*delay_);
   transducer_.advance(model_.electrical_power_pu(x.data()), dt_s_, p[P::kMeasLag]);
   const double w = 1.0 + x[GensetModel::kAlt + Alternator::kDw];
   ripple_pu_ = ripple_.advance(dt_s_, w, Engine::torque_pu(x.data() + GensetModel::kEng));

@@ -1,6 +1,7 @@
 // The generator-set plant behind the Plant interface: the GensetModel ODE integrated by CVODE
-// tick by tick, the fuel history buffer, rack backlash, firing ripple and the measurement
-// chain, with timed parameter changes applied exactly at their plant time.
+// tick by tick, the fuel history buffer, the engine lags in closed form while no clamp acts
+// (EnginePath), rack backlash, firing ripple and the measurement chain, with timed parameter
+// changes applied exactly at their plant time.
 #pragma once
 
 #include <memory>
@@ -9,6 +10,7 @@
 
 #include "plantsim/plant/bias_path.hpp"
 #include "plantsim/plant/config.hpp"
+#include "plantsim/plant/engine_path.hpp"
 #include "plantsim/plant/measurement_chain.hpp"
 #include "plantsim/plant/model.hpp"
 #include "plantsim/plant/plant.hpp"
@@ -36,6 +38,7 @@ class GensetPlant : public Plant {
   double rack_pu() const { return backlash_.rack_pu(); }
   double actuator_pu() const { return actuator_pu_; }  // before backlash
   bool split_bias_path() const { return model_.split_bias_path(); }
+  bool engine_closed_form() const { return model_.engine_path() != nullptr; }  // EnginePath
   SolverStats solver_stats() const { return solver_->stats(); }
   const std::string& last_error() const { return error_; }
 
@@ -44,8 +47,12 @@ class GensetPlant : public Plant {
   void reconfigure();
   void update_measurement();
   void advance_bias_path(double duration_s);
-  void sync_state() { x_.head(solver_->state().size()) = solver_->state(); }
-  void restart_solver(double t_s);
+  void sync_state();
+  // Restarts CVODE from x_ at t_s, with the engine in closed form when it holds there.
+  void restart_solver(double t_s, bool try_engine_path = true);
+  void retry_engine_path();
+  double horizon_s(double t_now, double t_end, bool look_ahead) const;
+  double engine_handback_s() const;
   bool advance_solver(double t_now, double t_end);
 
   GensetModel model_;
@@ -53,6 +60,11 @@ class GensetPlant : public Plant {
   double dt_s_;
   std::unique_ptr<FuelDelayLine> delay_;
   std::unique_ptr<CvodeSolver> solver_;
+  EnginePath engine_path_;
+  // Ticks with the engine in the ODE (a clamp acted) before the closed form is tried again:
+  // a failed try costs one anchor (about a dead time of knots), a success one solver restart.
+  static constexpr int kEngineRetryTicks = 100;
+  int ode_engine_ticks_ = 0;
   Eigen::VectorXd x_;  // full state at the last output time
   Backlash backlash_;
   BiasPath bias_path_;

@@ -11,7 +11,7 @@ double MeasurementChain::sample_kw(const Params& p, double t_s, double p_pu, dou
   // does not shift the random sequence of the other source.
   const double n_white = normal_(rng_);
   const double n_drift = normal_(rng_);
-  const double a = std::exp(-dt_s_ / p[P::kMeasDriftTau]);
+  const double a = drift_decay_(-dt_s_ / p[P::kMeasDriftTau]);
   drift_kw_ = a * drift_kw_ + std::sqrt(1.0 - a * a) * p[P::kMeasDrift] * n_drift;
   y += drift_kw_ + p[P::kMeasNoise] * n_white;
   y += p[P::kMeasPickup] * std::sin(2.0 * std::numbers::pi * p[P::kMeasPickupHz] * t_s);

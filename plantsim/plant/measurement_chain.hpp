@@ -17,11 +17,27 @@ namespace plantsim {
 // Power transducer lag Tt y' = u - y, advanced per tick exactly for an input that is linear
 // between the tick samples (first-order hold), a = exp(-h/Tt):
 //   y_{k+1} = a y_k + (1 - a) u_k + (u_{k+1} - u_k) (1 - (Tt/h)(1 - a)).
+// exp(x), recomputed only when x changes: the per-tick decays repeat tick after tick.
+class ExpMemo {
+ public:
+  double operator()(double x) {
+    if (x != x_) {
+      x_ = x;
+      y_ = std::exp(x);
+    }
+    return y_;
+  }
+
+ private:
+  double x_ = 0.0;
+  double y_ = 1.0;
+};
+
 class TransducerLag {
  public:
   void reset(double value) { y_ = u_ = value; }
   double advance(double u_next, double h_s, double lag_s) {
-    const double a = std::exp(-h_s / lag_s);
+    const double a = decay_(-h_s / lag_s);
     y_ = a * y_ + (1.0 - a) * u_ + (u_next - u_) * (1.0 - lag_s / h_s * (1.0 - a));
     u_ = u_next;
     return y_;
@@ -31,6 +47,7 @@ class TransducerLag {
  private:
   double y_ = 0.0;
   double u_ = 0.0;
+  ExpMemo decay_;
 };
 
 class MeasurementChain {
@@ -43,6 +60,7 @@ class MeasurementChain {
   std::mt19937_64 rng_;
   std::normal_distribution<double> normal_{0.0, 1.0};
   double dt_s_;
+  ExpMemo drift_decay_;
   double drift_kw_ = 0.0;
   double ac_lowpass_kw_ = 0.0;
   bool ac_started_ = false;

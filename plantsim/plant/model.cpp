@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cmath>
 
 #include "plantsim/plant/plant.hpp"
@@ -39,18 +40,34 @@ void GensetModel::rhs(const double* x, double bias_pu, double fuel_delayed_pu, d
   dx[kMeas] = (pe - x[kMeas]) / p_[P::kMeasLag];
 }
 
+Eigen::VectorXd GensetModel::atol_scale(const Params& p) {
+  Eigen::VectorXd scale = Eigen::VectorXd::Ones(active_size(p));
+  scale[kGov + Degov1::kZ2] = 1.0 / p[P::kGovT2];
+  scale[kGov + Degov1::kA2] = 1.0 / std::min(p[P::kGovT5], p[P::kGovT6]);
+  return scale;
+}
+
 void GensetModel::set_frozen(const Eigen::VectorXd& full) {
   full_x_ = full;
   active_ = active_size(p_);
 }
 
 bool GensetModel::derivatives(double t, const double* x, double* dx) {
-  const double fuel = delay_->at(t - dead_time_s(p_));
   full_x_.head(active_) = Eigen::Map<const Eigen::VectorXd>(x, active_);
-  if (split_) {
-    rhs(full_x_.data(), 0.0, fuel, full_dx_.data(), false);
+  const double bias_pu = split_ ? 0.0 : bias_pu_;
+  if (engine_path_ != nullptr) {
+    // Same equations as rhs() with the engine taken from the closed form.
+    const double* xs = full_x_.data();
+    double* dxs = full_dx_.data();
+    const double torque = engine_path_->torque_at(t);
+    const double pe = alt_.electrical_power_pu(xs + kAlt);
+    gov_.derivatives(xs + kGov, pe, xs[kAlt + Alternator::kDw], bias_pu, dxs + kGov, !split_);
+    dxs[kEng + Engine::kTorque] = 0.0;
+    dxs[kEng + Engine::kBoost] = 0.0;
+    alt_.derivatives(xs + kAlt, torque, dxs + kAlt);
+    dxs[kMeas] = (pe - xs[kMeas]) / p_[P::kMeasLag];
   } else {
-    rhs(full_x_.data(), bias_pu_, fuel, full_dx_.data());
+    rhs(full_x_.data(), bias_pu, delay_->at(t - dead_time_s(p_)), full_dx_.data(), !split_);
   }
   Eigen::Map<Eigen::VectorXd>(dx, active_) = full_dx_.head(active_);
   return full_dx_.head(active_).allFinite();

@@ -12,6 +12,7 @@
 
 #include "plantsim/plant/alternator.hpp"
 #include "plantsim/plant/engine.hpp"
+#include "plantsim/plant/engine_path.hpp"
 #include "plantsim/plant/governor.hpp"
 #include "plantsim/solver/cvode_solver.hpp"
 
@@ -35,6 +36,11 @@ class GensetModel : public OdeSystem {
   static int active_size(const Params& p) {
     return p[P::kAltFluxDecay] > 0.5 ? kMeas : kAlt + Alternator::kEq;
   }
+  // Factors on solver.atol for the active states. The governor's z2 = z1' and a2 = a1' are
+  // rates (pu/s) beside positions (pu): their tolerance is the position tolerance over the
+  // block's fastest lag, T2 and min(T5, T6), the time in which such a rate error moves its
+  // position by atol. Every other state gets atol itself.
+  static Eigen::VectorXd atol_scale(const Params& p);
   // Full state whose tail beyond active_size() stays frozen; sets the active size.
   void set_frozen(const Eigen::VectorXd& full);
   int size() const override { return active_; }
@@ -50,6 +56,10 @@ class GensetModel : public OdeSystem {
   void set_bias_pu(double bias_pu) { bias_pu_ = bias_pu; }
   double bias_pu() const { return bias_pu_; }
   void set_delay_line(const FuelDelayLine* line) { delay_ = line; }
+  // With a path the engine lags are solved outside (EnginePath): the ODE takes the torque
+  // from it and its engine states are constant placeholders. nullptr: the ODE integrates them.
+  void set_engine_path(const EnginePath* path) { engine_path_ = path; }
+  const EnginePath* engine_path() const { return engine_path_; }
 
   double electrical_power_pu(const double* x) const { return alt_.electrical_power_pu(x + kAlt); }
   double terminal_voltage_pu(const double* x) const { return alt_.terminal_voltage_pu(x + kAlt); }
@@ -66,6 +76,7 @@ class GensetModel : public OdeSystem {
   double bias_pu_ = 0.0;
   bool split_ = false;
   const FuelDelayLine* delay_ = nullptr;
+  const EnginePath* engine_path_ = nullptr;
   int active_ = kSize;
   Eigen::VectorXd full_x_ = Eigen::VectorXd::Zero(kSize);
   Eigen::VectorXd full_dx_ = Eigen::VectorXd::Zero(kSize);

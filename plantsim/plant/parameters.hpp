@@ -92,7 +92,7 @@ namespace plantsim {
   X(kMeasQuant, "meas.quant_kw", "kW", 0.0, 0.0, 1e4, "quantisation step (0 off)") \
   X(kMeasAcRc, "meas.ac_rc_s", "s", 0.0, 0.0, 1e4, "AC-coupling RC (0 = DC coupled)") \
   X(kSolverRtol, "solver.rtol", "1", 1e-8, 1e-12, 1e-2, "CVODE relative tolerance") \
-  X(kSolverAtol, "solver.atol", "pu", 1e-7, 1e-14, 1e-2, "CVODE absolute tolerance")
+  X(kSolverAtol, "solver.atol", "pu", 2e-8, 1e-14, 1e-2, "CVODE absolute tolerance")
 // clang-format on
 
 enum class P : int {

@@ -75,7 +75,7 @@ CvodeSolver::CvodeSolver(OdeSystem& system, double t0, const Eigen::VectorXd& x0
     check_retval(CVodeSetErrHandlerFn(impl_->mem, silent_handler, nullptr), "CVodeSetErrHandlerFn");
     check_retval(CVodeInit(impl_->mem, rhs_trampoline, t0, impl_->y), "CVodeInit");
     check_retval(CVodeSetUserData(impl_->mem, &system), "CVodeSetUserData");
-    check_retval(CVodeSStolerances(impl_->mem, opts.rtol, opts.atol), "CVodeSStolerances");
+    set_tolerances(opts, n);
     impl_->a = SUNDenseMatrix(n, n, impl_->ctx);
     check_ptr(impl_->a, "SUNDenseMatrix");
     impl_->ls = SUNLinSol_Dense(impl_->y, impl_->a, impl_->ctx);
@@ -91,6 +91,20 @@ CvodeSolver::CvodeSolver(OdeSystem& system, double t0, const Eigen::VectorXd& x0
 }
 
 CvodeSolver::~CvodeSolver() { delete impl_; }
+
+void CvodeSolver::set_tolerances(const SolverOptions& opts, long n) {
+  if (opts.atol_scale.size() == 0) {
+    check_retval(CVodeSStolerances(impl_->mem, opts.rtol, opts.atol), "CVodeSStolerances");
+    return;
+  }
+  if (opts.atol_scale.size() != n) throw SolverError("CVodeSVtolerances", CV_ILL_INPUT);
+  N_Vector atol = N_VClone(impl_->y);  // CVODE keeps its own copy
+  check_ptr(atol, "N_VClone");
+  Eigen::Map<Eigen::VectorXd>(N_VGetArrayPointer(atol), n) = opts.atol * opts.atol_scale;
+  const int retval = CVodeSVtolerances(impl_->mem, opts.rtol, atol);
+  N_VDestroy(atol);
+  check_retval(retval, "CVodeSVtolerances");
+}
 
 void CvodeSolver::set_max_step(double max_step_s) {
   check_retval(CVodeSetMaxStep(impl_->mem, max_step_s), "CVodeSetMaxStep");

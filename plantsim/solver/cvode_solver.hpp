@@ -37,6 +37,9 @@ class OdeSystem {
 struct SolverOptions {
   double rtol = 1e-6;
   double atol = 1e-8;
+  // Per-state factors on atol (empty: atol for every state), for states in other units than
+  // the rest, e.g. a rate in pu/s beside positions in pu.
+  Eigen::VectorXd atol_scale;
   double max_step_s = 0.0;  // 0 = unlimited
   long max_steps = 100000;  // per advance_to()
   int max_order = 5;        // BDF order limit (1..5)
@@ -73,6 +76,7 @@ class CvodeSolver {
   SolverStats stats() const;
 
  private:
+  void set_tolerances(const SolverOptions& opts, long n);
   struct Impl;
   Impl* impl_;
   double t_;
