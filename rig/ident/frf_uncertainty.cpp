@@ -2,6 +2,7 @@
 
 #include <Eigen/Eigenvalues>
 #include <Eigen/LU>
+#include <unsupported/Eigen/FFT>
 #include <algorithm>
 #include <cmath>
 #include <complex>
@@ -37,17 +38,22 @@ double parzen(double tau, double m) {
   return 0.0;
 }
 
-// Sum over |tau| <= m of w(tau) r(tau) e^{-j w tau} at bin k of an L-point grid.
+// Sum over |tau| <= m of w(tau) r(tau) e^{-j w tau} at bin k of an L-point grid (an FFT of
+// the windowed lags placed circularly; lags beyond L/2 alias, which the callers avoid with
+// L > 2 m).
 Eigen::VectorXcd smoothed_spectrum(const signal::Correlation& r, Eigen::Index m, int fft_length) {
-  const int bins = fft_length / 2 + 1;
-  Eigen::VectorXcd out = Eigen::VectorXcd::Zero(bins);
+  std::vector<double> x(static_cast<std::size_t>(fft_length), 0.0);
   for (Eigen::Index tau = -m; tau <= m; ++tau) {
     const double v =
         parzen(static_cast<double>(tau), static_cast<double>(m) + 1.0) * r.r(r.zero_index + tau);
-    if (v == 0.0) continue;
-    const double step = -kTwoPi * static_cast<double>(tau) / fft_length;
-    for (int k = 0; k < bins; ++k) out(k) += v * std::polar(1.0, step * k);
+    x[static_cast<std::size_t>((tau % fft_length + fft_length) % fft_length)] += v;
   }
+  Eigen::FFT<double> fft;
+  std::vector<std::complex<double>> spectrum;
+  fft.fwd(spectrum, x);
+  const int bins = fft_length / 2 + 1;
+  Eigen::VectorXcd out(bins);
+  for (int k = 0; k < bins; ++k) out(k) = spectrum[static_cast<std::size_t>(k)];
   return out;
 }
 

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <optional>
 #include <stdexcept>
 
 #include "rig/ident/output_error.hpp"
@@ -11,19 +12,12 @@ namespace rig::ident {
 namespace {
 
 constexpr double kZ95 = 1.959963984540054;
+// Weighs degrees against dB when ranking two bounds (the default targets: 3 deg ~ 0.5 dB).
+constexpr double kDegPerDb = 6.0;
+// A simpler structure is taken when its bound is within this factor of the best one.
+constexpr double kSimplerTolerance = 1.1;
 
 int parameter_count(model::ModelOrder o) { return o.n + o.m + 1; }
-
-bool inside_band(const OrderCandidate& simple, const OrderCandidate& complex) {
-  for (std::size_t i = 0; i < simple.band.size() && i < complex.band.size(); ++i) {
-    const auto& s = simple.band[i];
-    const auto& c = complex.band[i];
-    const double d_deg = std::remainder(s.phase_deg - c.phase_deg, 360.0);
-    if (std::abs(s.mag_db - c.mag_db) > kZ95 * c.sd_db) return false;
-    if (std::abs(d_deg) > kZ95 * c.sd_deg) return false;
-  }
-  return true;
-}
 
 // A pole this many times faster than the fastest pole of the simpler model, added so that a
 // nested start has (almost) the simpler model's response and cost.
@@ -146,36 +140,45 @@ OrderCandidate fit_one(const Eigen::VectorXd& u, const Eigen::VectorXd& y, doubl
 
 }  // namespace
 
-int simplest_adequate(const std::vector<OrderCandidate>& cands) {
+double score(const BandWidth95& w) { return w.db + w.deg / kDegPerDb; }
+
+int best_bound(const std::vector<OrderCandidate>& cands) {
+  double lowest = std::numeric_limits<double>::infinity();
+  for (const auto& c : cands) {
+    if (c.ok) lowest = std::min(lowest, score(c.width));
+  }
+  if (!std::isfinite(lowest)) return -1;
   for (std::size_t i = 0; i < cands.size(); ++i) {
-    if (!cands[i].ok) continue;
-    bool adequate = true;
-    for (std::size_t j = 0; j < cands.size() && adequate; ++j) {
-      if (j == i || !cands[j].ok) continue;
-      if (parameter_count(cands[j].order) <= parameter_count(cands[i].order)) continue;
-      adequate = inside_band(cands[i], cands[j]);
+    if (cands[i].ok && score(cands[i].width) <= kSimplerTolerance * lowest) {
+      return static_cast<int>(i);
     }
-    if (adequate) return static_cast<int>(i);
   }
   return -1;
 }
 
-void widen_by_richer(OrderChoice& choice) {
-  OrderCandidate* best =
-      choice.chosen < 0 ? nullptr : &choice.candidates[static_cast<std::size_t>(choice.chosen)];
-  if (best == nullptr) return;
-  BandWidth95 w = best->width;
-  for (const auto& c : choice.candidates) {
-    if (!c.ok || parameter_count(c.order) <= parameter_count(best->order)) continue;
-    for (std::size_t i = 0; i < best->band.size() && i < c.band.size(); ++i) {
-      const auto& b = best->band[i];
-      const auto& r = c.band[i];
+// The bound of candidate i: its own band, or wider when the tightest richer candidate's
+// band plus the distance to it is wider (see the header).
+BandWidth95 widened(const std::vector<OrderCandidate>& cands, std::size_t i) {
+  const OrderCandidate& best = cands[i];
+  std::optional<BandWidth95> tightest;
+  for (const auto& c : cands) {
+    if (!c.ok || parameter_count(c.order) <= parameter_count(best.order)) continue;
+    BandWidth95 w;
+    for (std::size_t k = 0; k < best.band.size() && k < c.band.size(); ++k) {
+      const auto& b = best.band[k];
+      const auto& r = c.band[k];
       w.db = std::max(w.db, std::abs(b.mag_db - r.mag_db) + c.band_factor * r.sd_db);
       w.deg = std::max(w.deg, std::abs(std::remainder(b.phase_deg - r.phase_deg, 360.0)) +
                                   c.band_factor * r.sd_deg);
     }
+    if (!tightest || score(w) < score(*tightest)) tightest = w;
   }
-  best->width = w;
+  BandWidth95 out = best.width;
+  if (tightest) {
+    out.db = std::max(out.db, tightest->db);
+    out.deg = std::max(out.deg, tightest->deg);
+  }
+  return out;
 }
 
 OrderChoice choose_order(const Eigen::VectorXd& u, const Eigen::VectorXd& y, double dt_s,
@@ -191,8 +194,12 @@ OrderChoice choose_order(const Eigen::VectorXd& u, const Eigen::VectorXd& y, dou
     const auto starts = start_models(ruu, ryu, order, options, warm, out.candidates);
     out.candidates.push_back(fit_one(u, y, dt_s, starts, order, options));
   }
-  out.chosen = simplest_adequate(out.candidates);
-  widen_by_richer(out);
+  std::vector<BandWidth95> bounds;
+  for (std::size_t i = 0; i < out.candidates.size(); ++i) {
+    bounds.push_back(out.candidates[i].ok ? widened(out.candidates, i) : BandWidth95{});
+  }
+  for (std::size_t i = 0; i < out.candidates.size(); ++i) out.candidates[i].width = bounds[i];
+  out.chosen = best_bound(out.candidates);
   return out;
 }
 

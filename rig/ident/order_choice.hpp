@@ -1,24 +1,26 @@
 // Automatic model order with the dead time, judged in the user's units (the frequency
 // response over the compare band), so that the online estimate has no structural floor:
-// as the record grows and the bands narrow, a more complex structure is taken as soon as
-// the data show that it changes the response.
+// as the record grows and the bands narrow, a richer structure is taken as soon as the data
+// show that it is the more accurate.
 //
 // Each candidate order is fitted by the time-domain output error on the record
 // (output_error.hpp) from several starts, keeping the lowest cost: its previous fit (or MMFM
-// from the averaged correlations when there is none) and every simpler candidate extended by
-// a far pole or a zero (a nested start, so that a richer structure never ends worse than a
-// simpler one by a poor local minimum), and a prior model (the pilot's) when one is given:
-// with a periodic excitation MMFM alone can start a second order in the wrong basin. Each has its
-// asymptotic covariance and 95 % band (frf_uncertainty.hpp). The rule: take the simplest candidate
-// whose response lies inside the 95 % band of every more complex candidate at every compare
-// frequency, in magnitude and in phase (more structure does not change the response detectably). A
-// candidate that fails or is unstable takes no part.
+// from the averaged correlations when there is none), every simpler candidate extended by a
+// far pole or a zero (a nested start, so that a richer structure never ends worse than a
+// simpler one by a poor local minimum), and a prior model (the pilot's) when one is given
+// (with a periodic excitation MMFM alone can start a second order in the wrong basin). Each
+// has its asymptotic covariance and simultaneous 95 % band (frf_uncertainty.hpp).
 //
-// The chosen model's band must also hold when the simpler structure is biased: its width is
-// the larger of its own band and, at each frequency, its distance from every richer
-// candidate plus that candidate's band (the truth lies in the richer band; the chosen
-// model is that far from it). So the stopping rule cannot be met by a structure whose
+// Each candidate's bound must also hold when its structure is biased: it is the larger of
+// its own band and the tightest bound a richer candidate gives, at each frequency the
+// distance to that candidate plus its band (the truth lies in the richer band; this model is
+// that far from it). The tightest, because a richer structure the data do not determine has
+// a huge band that bounds nothing. So the stopping rule cannot be met by a structure whose
 // error the data already show.
+//
+// The rule: the candidate with the smallest bound (dB + deg / 6, the default targets' ratio),
+// or the simplest whose bound is within 10 % of it. A candidate that fails or is unstable
+// takes no part.
 #pragma once
 
 #include <Eigen/Core>
@@ -74,7 +76,8 @@ OrderChoice choose_order(const Eigen::VectorXd& u, const Eigen::VectorXd& y, dou
                          const OrderChoiceOptions& options,
                          const std::vector<OrderCandidate>& warm = {});
 
-// The rule above on fitted candidates (index of the chosen one, -1 when none is ok).
-int simplest_adequate(const std::vector<OrderCandidate>& candidates);
+// The rule above on fitted candidates whose widths are already their bounds (index of the
+// chosen one, -1 when none is ok).
+int best_bound(const std::vector<OrderCandidate>& candidates);
 
 }  // namespace rig::ident

@@ -62,7 +62,7 @@ struct PilotSettings {
 enum class ExcitationType { kGaussian, kPrbs, kShaped };
 
 struct ExcitationSettings {
-  ExcitationType type = ExcitationType::kGaussian;
+  ExcitationType type = ExcitationType::kShaped;  // docs/excitation.md
   // Covers the compare band (to 5 Hz) with room: at 4 Hz (twice the mode, the thesis's
   // rule) the response above 4 Hz is too poorly known for the stopping rule (docs/decisions.md).
   double bandwidth_hz = 6.0;
