@@ -23,6 +23,12 @@ Per run, from report.json and recording.csv:
     truth: its worst error over 0.5-5 Hz within the band, in dB and in degrees.
 Prints a line per run, then medians and spreads (min-max) over the seeds, and the ratio
 MMFM / stepped sine (with and without the pilot counted). Exit 1 when a run fails to run.
+
+--sweep-search: also a small search over the stepped sine's settings (`rig sweep --emulate`,
+points 8 or 12, integrate 2 cycles and 1 s or 4 cycles and 2 s, settle 1.5 or 3 cycles) on
+the same seeds: for each setting the median phase time and worst errors, and the fastest
+setting whose median worst error is within +-0.5 dB / +-3 deg, against which the ratio is
+reported again.
 """
 import argparse, cmath, csv, json, math, os, statistics, subprocess, sys, tempfile
 
@@ -112,6 +118,56 @@ def one_run(rig, seed, kind, out_root):
     return out, rep
 
 
+SWEEP_TEST = """[sweep]
+points = {points}
+from_hz = 0.4
+to_hz = 5.5
+min_integrate_s = {min_s}
+integrate_cycles = {cycles}
+settle_cycles = {settle}
+"""
+
+
+def sweep_search(rig, seeds, truth, out_root):
+    """Median sweep time and errors per setting; returns the fastest adequate (time, name)."""
+    best = None
+    for points in (8, 12):
+        for cycles, min_s in ((2, 1.0), (4, 2.0)):
+            for settle in (1.5, 3.0):
+                name = f'p{points}-c{cycles}-s{settle}'
+                test = os.path.join(out_root, f'sweep-{name}.toml')
+                with open(test, 'w') as fh:
+                    fh.write(SWEEP_TEST.format(points=points, min_s=min_s, cycles=cycles,
+                                               settle=settle))
+                times, dbs, degs = [], [], []
+                for seed in seeds:
+                    out = os.path.join(out_root, f'sweep-{name}-{seed}')
+                    subprocess.run([rig, 'sweep', '--emulate', '--seed', str(seed), '--test', test,
+                                    '--from', '0.4', '--to', '5.5', '--points', str(points),
+                                    '--out', out, '--force', '--quiet'],
+                                   stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+                                   check=False)
+                    try:
+                        with open(os.path.join(out, 'report.json')) as fh:
+                            rep = json.load(fh)
+                        dt = 1.0 / rep['config']['sample_rate_hz']
+                        times.append(phase_times(os.path.join(out, 'recording.csv'), dt).get(3, 0.0))
+                        db, deg = frf_error(os.path.join(out, 'sweep.csv'), truth)
+                        dbs.append(db)
+                        degs.append(deg)
+                    except (OSError, KeyError, ValueError):
+                        continue
+                if not times:
+                    continue
+                t, db, deg = statistics.median(times), statistics.median(dbs), statistics.median(degs)
+                ok = db <= 0.5 and deg <= 3.0
+                print(f'  sweep {name}: {t:.0f} s, median worst error {db:.2f} dB {deg:.1f} deg'
+                      f'{" (within 0.5 dB / 3 deg)" if ok else ""}')
+                if ok and (best is None or t < best[0]):
+                    best = (t, name)
+    return best
+
+
 def summary(name, xs, fmt='{:.1f}'):
     xs = [x for x in xs if x is not None]
     if not xs:
@@ -127,6 +183,7 @@ def main():
     ap.add_argument('--seed', type=int, default=21, help='first plant seed')
     ap.add_argument('--types', default='shaped,gaussian,prbs')
     ap.add_argument('--out', default=None)
+    ap.add_argument('--sweep-search', action='store_true')
     a = ap.parse_args()
     with open(TRUTH) as fh:
         truth = json.load(fh)
@@ -134,6 +191,12 @@ def main():
     os.makedirs(out_root, exist_ok=True)
     print(f'plant seeds {a.seed}..{a.seed + a.seeds - 1}, preset stornoway, outputs in {out_root}')
     failed = False
+    fastest = None
+    if a.sweep_search:
+        print('--- stepped sine settings (rig sweep --emulate)')
+        fastest = sweep_search(a.rig, range(a.seed, a.seed + a.seeds), truth, out_root)
+        print('fastest adequate stepped sine: ' +
+              (f'{fastest[1]}, {fastest[0]:.0f} s' if fastest else 'none'))
     for kind in a.types.split(','):
         rows = []
         for seed in range(a.seed, a.seed + a.seeds):
@@ -180,6 +243,11 @@ def main():
         print(summary('ratio time to 0.5 dB / 3 deg / stepped sine',
                       [r['t05'] / r['sweep_s'] for r in rows if r['t05'] and r['sweep_s']],
                       '{:.2f}'))
+        if fastest:
+            print(summary(f'ratio time to 0.5 dB / 3 deg / fastest adequate sweep ({fastest[1]})',
+                          [r['t05'] / fastest[0] for r in rows if r['t05']], '{:.2f}'))
+            print(summary('ratio excitation phase (stopping rule) / fastest adequate sweep',
+                          [r['excite_s'] / fastest[0] for r in rows], '{:.2f}'))
         print(summary('ratio with the pilot counted (stopping rule)',
                       [(r['excite_s'] + r['pilot_s']) / r['sweep_s'] for r in rows if r['sweep_s']],
                       '{:.2f}'))

@@ -29,7 +29,7 @@ TEST(TestConfig, DefaultsAreValidAndDocumentedValuesHold) {
   EXPECT_DOUBLE_EQ(c.compare.phase_tol_deg, 5.0);
   EXPECT_DOUBLE_EQ(c.compare.from_hz, 0.5);
   EXPECT_DOUBLE_EQ(c.compare.to_hz, 5.0);
-  EXPECT_EQ(c.excitation.type, ExcitationType::kGaussian);
+  EXPECT_EQ(c.excitation.type, ExcitationType::kShaped);
 }
 
 // One source of the safety defaults: a test file that leaves [safety] (and the sample rate)
