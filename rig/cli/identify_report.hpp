@@ -17,19 +17,18 @@ namespace rig::cli {
 // What `rig identify` read and how it was asked to run.
 struct IdentifyContext {
   const io::Recording* recording = nullptr;
-  std::string input;          // column names
+  std::string input;  // column names
   std::string output;
-  std::string method;         // "mmfm" | "srivc"
-  std::string order_arg;      // "auto" | "n/m"
-  std::string delay_arg;      // "auto" | seconds
+  std::string method;                    // "mmfm" | "srivc"
+  std::string order_arg;                 // "auto" | "n/m"
+  std::string delay_arg;                 // "auto" | seconds
   signal::CorrelatorOptions correlator;  // as used (dt_s set)
   double estimation_fraction = 0.5;
   RowSelection rows;  // which rows of the file `recording` holds
 };
 
 // result == nullptr: the data-quality checks stopped the run (status "data_quality_failed").
-nlohmann::json identify_report_json(const IdentifyContext& ctx,
-                                    const ident::QualityReport& quality,
+nlohmann::json identify_report_json(const IdentifyContext& ctx, const ident::QualityReport& quality,
                                     const ident::IdentifyResult* result);
 
 model::ModelFile identify_model_file(const IdentifyContext& ctx,

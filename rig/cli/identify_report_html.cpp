@@ -33,9 +33,15 @@ void quality_block(HtmlReport& page, const ident::QualityReport& q) {
 void correlation_charts(HtmlReport& page, const signal::Correlation& ruu,
                         const signal::Correlation& ryu, const signal::Correlation* model_ryu) {
   page.section("Correlation functions");
-  page.chart({"Input auto-correlation r_uu", "lag (s)", "r_uu", lags_s(ruu),
+  page.chart({"Input auto-correlation r_uu",
+              "lag (s)",
+              "r_uu",
+              lags_s(ruu),
               {{"r_uu", report::to_std_vector(ruu.r)}}});
-  Chart cross{"Cross-correlation r_yu: measured and model", "lag (s)", "r_yu", lags_s(ryu),
+  Chart cross{"Cross-correlation r_yu: measured and model",
+              "lag (s)",
+              "r_yu",
+              lags_s(ryu),
               {{"measured", report::to_std_vector(ryu.r)}}};
   if (model_ryu && model_ryu->size() == ryu.size()) {
     cross.series.push_back({"model", report::to_std_vector(model_ryu->r), "#d62728", true});
@@ -111,8 +117,9 @@ void bode_block(HtmlReport& page, const ident::IdentifyResult& r, double dt_s) {
   measured.color = "#555";
   const auto [mag, phase] = report::bode_charts("Bode plot", f, {model, measured});
   page.section("Frequency response");
-  page.paragraph("Shaded: 5-95 % band of |H| from the parameter standard errors (taken as "
-                 "independent, 400 seeded draws). Points: S_yu/S_uu from the correlations.");
+  page.paragraph(
+      "Shaded: 5-95 % band of |H| from the parameter standard errors (taken as "
+      "independent, 400 seeded draws). Points: S_yu/S_uu from the correlations.");
   page.chart(mag).chart(phase);
 }
 
@@ -122,21 +129,25 @@ void model_block(HtmlReport& page, const IdentifyContext& ctx, const ident::Iden
                              polynomial_text(r.model.num), polynomial_text(r.model.den)));
   report::Table params{{"parameter", "value", "standard error"}};
   for (const auto& p : r.parameters) {
-    params.rows.push_back({p.name, fmt::format("{:.6g}", p.value), fmt::format("{:.3g}", p.std_error)});
+    params.rows.push_back(
+        {p.name, fmt::format("{:.6g}", p.value), fmt::format("{:.3g}", p.std_error)});
   }
   page.table(params);
   if (r.derived.valid) {
-    page.key_values({{"static gain", fmt::format("{:.4g} +- {:.2g}", r.derived.gain, r.derived.gain_std)},
-                     {"natural frequency", fmt::format("{:.4g} +- {:.2g} Hz", r.derived.fn_hz, r.derived.fn_hz_std)},
-                     {"damping ratio", fmt::format("{:.4g} +- {:.2g}", r.derived.zeta, r.derived.zeta_std)},
-                     {"dead time", fmt::format("{:.4g} +- {:.2g} s", r.delay_s, r.delay_std_s)}});
+    page.key_values(
+        {{"static gain", fmt::format("{:.4g} +- {:.2g}", r.derived.gain, r.derived.gain_std)},
+         {"natural frequency",
+          fmt::format("{:.4g} +- {:.2g} Hz", r.derived.fn_hz, r.derived.fn_hz_std)},
+         {"damping ratio", fmt::format("{:.4g} +- {:.2g}", r.derived.zeta, r.derived.zeta_std)},
+         {"dead time", fmt::format("{:.4g} +- {:.2g} s", r.delay_s, r.delay_std_s)}});
   }
   report::Table orders{{"order n/m", "fit %", "validation fit %", "score", "delay (s)"}};
   for (std::size_t i = 0; i < r.order_table.size(); ++i) {
     const auto& o = r.order_table[i];
-    orders.rows.push_back({fmt::format("{}/{}", o.order.n, o.order.m), fmt::format("{:.1f}", o.fit_pct),
-                           fmt::format("{:.1f}", o.validation_fit_pct), fmt::format("{:.2f}", o.score),
-                           fmt::format("{:.4g}", o.delay_s)});
+    orders.rows.push_back({fmt::format("{}/{}", o.order.n, o.order.m),
+                           fmt::format("{:.1f}", o.fit_pct),
+                           fmt::format("{:.1f}", o.validation_fit_pct),
+                           fmt::format("{:.2f}", o.score), fmt::format("{:.4g}", o.delay_s)});
     if (o.order == r.order) orders.highlight_rows.push_back(i);
   }
   page.section("Model orders (estimated on the first part, validated on the rest)");
@@ -153,12 +164,13 @@ void write_identify_html(const std::filesystem::path& path, const IdentifyContex
   const io::Recording& rec = *ctx.recording;
   HtmlReport page("rig identify: " + rec.source);
   page.key_values({{"recording", rec.source},
-                   {"samples", fmt::format("{} at {:.6g} s ({})", rec.rows(), rec.dt_s, rec.sampling.dt_source)},
+                   {"samples", fmt::format("{} at {:.6g} s ({})", rec.rows(), rec.dt_s,
+                                           rec.sampling.dt_source)},
                    {"rows", ctx.rows.reason},
                    {"input / output", ctx.input + " / " + ctx.output},
                    {"method", ctx.method + ", order " + ctx.order_arg + ", delay " + ctx.delay_arg},
-                   {"result", r ? fmt::format("validation fit {:.1f} % (order {}/{})", r->validation_fit_pct,
-                                              r->order.n, r->order.m)
+                   {"result", r ? fmt::format("validation fit {:.1f} % (order {}/{})",
+                                              r->validation_fit_pct, r->order.n, r->order.m)
                                 : std::string("not identified: data-quality checks failed")}});
   for (const auto& w : rec.warnings) page.note(report::Tone::kWarning, w);
   quality_block(page, quality);
@@ -175,7 +187,8 @@ std::string identify_summary(const IdentifyContext& ctx, const ident::QualityRep
                               rec.rows(), rec.dt_s, ctx.input, ctx.output);
   s += "  rows: " + ctx.rows.reason + "\n";
   for (const auto& w : rec.warnings) s += "  warning: " + w + "\n";
-  for (const auto& f : quality.flags) s += fmt::format("  {}: {}\n", ident::to_string(f.severity), f.message);
+  for (const auto& f : quality.flags)
+    s += fmt::format("  {}: {}\n", ident::to_string(f.severity), f.message);
   if (r) {
     s += fmt::format("  model ({}, order {}/{}): H(s) = e^(-{:.4g} s) ({}) / ({})\n", ctx.method,
                      r->order.n, r->order.m, r->model.delay_s, polynomial_text(r->model.num),

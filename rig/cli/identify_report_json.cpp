@@ -22,12 +22,13 @@ json recording_json(const IdentifyContext& ctx) {
             {"jitter_rms_s", rec.sampling.jitter_rms_s},
             {"uniform_sampling", rec.sampling.uniform},
             {"warnings", rec.warnings}};
-  j["rows_used"] = {{"selection", ctx.rows.mode},
-                    {"first_row", ctx.rows.first + 1},
-                    {"count", ctx.rows.count},
-                    {"of", ctx.rows.total},
-                    {"phase_code", ctx.rows.phase_code ? json(*ctx.rows.phase_code) : json(nullptr)},
-                    {"reason", ctx.rows.reason}};
+  j["rows_used"] = {
+      {"selection", ctx.rows.mode},
+      {"first_row", ctx.rows.first + 1},
+      {"count", ctx.rows.count},
+      {"of", ctx.rows.total},
+      {"phase_code", ctx.rows.phase_code ? json(*ctx.rows.phase_code) : json(nullptr)},
+      {"reason", ctx.rows.reason}};
   j["sidecar"] = rec.sidecar.present ? io::to_json(rec.sidecar) : json(nullptr);
   return j;
 }
@@ -65,12 +66,14 @@ json settings_json(const IdentifyContext& ctx, const ident::IdentifyResult* r) {
 json result_json(const ident::IdentifyResult& r) {
   json params = json::array();
   for (const auto& p : r.parameters) {
-    params.push_back({{"name", p.name}, {"value", number_or_null(p.value)},
+    params.push_back({{"name", p.name},
+                      {"value", number_or_null(p.value)},
                       {"std_error", number_or_null(p.std_error)}});
   }
   json orders = json::array();
   for (const auto& o : r.order_table) {
-    orders.push_back({{"n", o.order.n}, {"m", o.order.m},
+    orders.push_back({{"n", o.order.n},
+                      {"m", o.order.m},
                       {"fit_pct", number_or_null(o.fit_pct)},
                       {"validation_fit_pct", number_or_null(o.validation_fit_pct)},
                       {"score", number_or_null(o.score)},
@@ -86,19 +89,21 @@ json result_json(const ident::IdentifyResult& r) {
                {"zeta", number_or_null(r.derived.zeta)},
                {"zeta_std", number_or_null(r.derived.zeta_std)}};
   }
-  return {{"model",
-           {{"num", report::to_json_array(r.model.num)},
-            {"den", report::to_json_array(r.model.den)},
-            {"delay_s", number_or_null(r.model.delay_s)},
-            {"order", {{"n", r.order.n}, {"m", r.order.m}}},
-            {"dc_gain", number_or_null(r.model.dc_gain())},
-            {"stable", r.model.is_stable()}}},
-          {"parameters", params},
-          {"delay", {{"value_s", number_or_null(r.delay_s)}, {"std_error_s", number_or_null(r.delay_std_s)}}},
-          {"derived", derived},
-          {"order_table", orders},
-          {"validation_fit_pct", number_or_null(r.validation_fit_pct)},
-          {"condition_number", number_or_null(r.condition_number)}};
+  return {
+      {"model",
+       {{"num", report::to_json_array(r.model.num)},
+        {"den", report::to_json_array(r.model.den)},
+        {"delay_s", number_or_null(r.model.delay_s)},
+        {"order", {{"n", r.order.n}, {"m", r.order.m}}},
+        {"dc_gain", number_or_null(r.model.dc_gain())},
+        {"stable", r.model.is_stable()}}},
+      {"parameters", params},
+      {"delay",
+       {{"value_s", number_or_null(r.delay_s)}, {"std_error_s", number_or_null(r.delay_std_s)}}},
+      {"derived", derived},
+      {"order_table", orders},
+      {"validation_fit_pct", number_or_null(r.validation_fit_pct)},
+      {"condition_number", number_or_null(r.condition_number)}};
 }
 
 }  // namespace
@@ -132,7 +137,8 @@ model::ModelFile identify_model_file(const IdentifyContext& ctx, const ident::Id
   }
   nlohmann::json params = nlohmann::json::array();
   for (const auto& p : r.parameters) {
-    params.push_back({{"name", p.name}, {"value", number_or_null(p.value)},
+    params.push_back({{"name", p.name},
+                      {"value", number_or_null(p.value)},
                       {"std_error", number_or_null(p.std_error)}});
   }
   m.extra["parameters"] = params;
@@ -148,8 +154,10 @@ std::string polynomial_text(const Eigen::VectorXd& c) {
     const double v = c[i];
     if (v == 0.0 && n > 0) continue;
     const Eigen::Index power = n - i;
-    if (!out.empty()) out += v < 0 ? " - " : " + ";
-    else if (v < 0) out += "-";
+    if (!out.empty())
+      out += v < 0 ? " - " : " + ";
+    else if (v < 0)
+      out += "-";
     out += fmt::format("{:.4g}", std::abs(v));
     if (power >= 1) out += " s";
     if (power >= 2) out += fmt::format("^{}", power);

@@ -2,7 +2,6 @@
 
 #include <Eigen/Eigenvalues>
 #include <Eigen/LU>
-#include <unsupported/Eigen/FFT>
 #include <algorithm>
 #include <cmath>
 #include <complex>
@@ -10,6 +9,7 @@
 #include <limits>
 #include <numbers>
 #include <stdexcept>
+#include <unsupported/Eigen/FFT>
 
 #include "rig/signal/correlators.hpp"
 #include "rig/signal/random.hpp"

@@ -61,13 +61,13 @@ struct ExcitationResult {
   double planned_std_pct = 0.0;  // from the pilot's amplitude plan
   double applied_std_pct = 0.0;  // measured std of u over the excitation (after supervisor)
   double duration_s = 0.0;
-  std::string stop_reason;                 // why the excitation stopped
-  std::vector<std::string> quality_flags;  // fatal data-quality findings
-  std::vector<BlockEstimate> history;      // one live estimate per block
-  std::optional<ident::MmfmResult> mmfm;   // the final estimate
+  std::string stop_reason;                         // why the excitation stopped
+  std::vector<std::string> quality_flags;          // fatal data-quality findings
+  std::vector<BlockEstimate> history;              // one live estimate per block
+  std::optional<ident::MmfmResult> mmfm;           // the final estimate
   std::optional<ident::OrderChoice> order_choice;  // its candidate structures (order table)
   std::string mmfm_error;
-  signal::Correlation ruu, ryu;   // online correlations (AC-coupled)
+  signal::Correlation ruu, ryu;     // online correlations (AC-coupled)
   std::vector<model::FrfPoint> h1;  // noise-driven FRF of the excitation record
 };
 

@@ -86,13 +86,13 @@ struct SupervisorConfigError : std::invalid_argument {
 };
 
 struct BackoffConfig {
-  double start_fraction = 0.6;       // envelope / band where the scale starts to fall
+  double start_fraction = 0.6;  // envelope / band where the scale starts to fall
   double zero_fraction = safety_defaults::kBackoffFraction;  // envelope / band: scale 0
-  double envelope_release_s = 2.0;   // peak-hold decay time constant
-  double recover_rate_per_s = 0.1;   // fastest rise of the scale (soft start: 10 s to 1)
-  double fall_rate_per_s = 5.0;      // fastest fall of the scale (1 to 0 in 0.2 s, no step)
-  double min_gain_share = 0.05;      // learn g^2 only while ms(u) >= this ms(r)
-  double resonance_hz = 2.0;         // dominant mode (prior or pilot); 0: no derivative term
+  double envelope_release_s = 2.0;                           // peak-hold decay time constant
+  double recover_rate_per_s = 0.1;  // fastest rise of the scale (soft start: 10 s to 1)
+  double fall_rate_per_s = 5.0;     // fastest fall of the scale (1 to 0 in 0.2 s, no step)
+  double min_gain_share = 0.05;     // learn g^2 only while ms(u) >= this ms(r)
+  double resonance_hz = 2.0;        // dominant mode (prior or pilot); 0: no derivative term
   double plan_fraction = safety_defaults::kPlanFraction;  // cap: predicted peak, band share
   double peak_to_rms = 4.0;          // response peak / rms: 4 for Gaussian noise excitation,
                                      // ~2 for a sine (sqrt 2 and margin); 0 disables the cap
@@ -142,17 +142,17 @@ struct PlausibilityCheck {
 };
 
 struct SupervisorConfig {
-  double p0_kw = 0.0;                // steady power from the steady-state check
+  double p0_kw = 0.0;  // steady power from the steady-state check
   // Defaults from rig/session/safety_defaults.hpp, shared with the test file's SafetySettings.
   double band_fraction = safety_defaults::kBandPct / 100.0;  // |P - P0| <= band_fraction P0;
                                                              // > 0.03 needs the override
-  bool band_override = false;        // explicit permission for a band above 3 % (recorded)
-  double baseline_bias_pct = 0.0;    // bias before excitation, the ramp's target
+  bool band_override = false;      // explicit permission for a band above 3 % (recorded)
+  double baseline_bias_pct = 0.0;  // bias before excitation, the ramp's target
   double clamp_pct = safety_defaults::kClampPct;  // |bias| <= this, whatever the estimate
   double ramp_rate_pct_per_s = safety_defaults::kRampPctPerS;  // back to baseline (trip, end)
   double dt_s = 1.0 / safety_defaults::kSampleRateHz;          // tick period
-  double noise_rms_kw = 0.0;         // power noise without excitation (steady-state check)
-  int stale_ticks = 3;               // unchanged counter for this many consecutive ticks trips
+  double noise_rms_kw = 0.0;  // power noise without excitation (steady-state check)
+  int stale_ticks = 3;        // unchanged counter for this many consecutive ticks trips
   std::uint16_t trip_status_mask = drivers::kHeartbeatLost | drivers::kPlantFault;
   std::uint16_t required_status_mask = drivers::kRunning;  // a cleared bit here trips
   BackoffConfig backoff;

@@ -182,8 +182,9 @@ std::map<std::string, Section> schema(TestConfig& c) {
                {"target_deg", num(c.mmfm.target_deg)},
                {"target_rel_std_error",
                 [](const Reader& r, const toml::node& n, const std::string& k) {
-                  r.fail(n, k, "replaced by mmfm.target_db and mmfm.target_deg (the stopping "
-                               "rule is the model's 95 % band over the compare band)");
+                  r.fail(n, k,
+                         "replaced by mmfm.target_db and mmfm.target_deg (the stopping "
+                         "rule is the model's 95 % band over the compare band)");
                 }},
                {"min_duration_s", num(c.mmfm.min_duration_s)},
                {"max_duration_s", num(c.mmfm.max_duration_s)},
@@ -230,9 +231,12 @@ void bind_document(const toml::table& doc, TestConfig& config) {
 
 const char* to_string(ExcitationType type) {
   switch (type) {
-    case ExcitationType::kPrbs: return "prbs";
-    case ExcitationType::kShaped: return "shaped";
-    case ExcitationType::kGaussian: break;
+    case ExcitationType::kPrbs:
+      return "prbs";
+    case ExcitationType::kShaped:
+      return "shaped";
+    case ExcitationType::kGaussian:
+      break;
   }
   return "gaussian";
 }

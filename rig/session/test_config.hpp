@@ -19,10 +19,10 @@ struct ConfigError : std::runtime_error {
 };
 
 struct LinkSettings {
-  std::string uri;                // e.g. modbus+tcp://127.0.0.1:1502?unit=1
+  std::string uri;  // e.g. modbus+tcp://127.0.0.1:1502?unit=1
   double sample_rate_hz = safety_defaults::kSampleRateHz;  // one write/read exchange per sample
-  int lockstep_ticks = 0;         // > 0: simulated plant advanced this many ticks per sample
-  double timeout_s = 0.5;         // response timeout per request
+  int lockstep_ticks = 0;  // > 0: simulated plant advanced this many ticks per sample
+  double timeout_s = 0.5;  // response timeout per request
 };
 
 struct PlantSettings {
@@ -89,8 +89,8 @@ struct MmfmTestSettings {
   // +-target_deg (the estimator's asymptotic covariance, rig/ident/frf_uncertainty.hpp).
   double target_db = 0.5;
   double target_deg = 3.0;
-  double min_duration_s = 30.0;          // never stop before this much excitation
-  double max_duration_s = 600.0;         // stop regardless
+  double min_duration_s = 30.0;   // never stop before this much excitation
+  double max_duration_s = 600.0;  // stop regardless
   // The applied excitation (std of u, after the supervisor) must reach this share of the
   // planned std, or the data do not support a model (exit 1, no model.json).
   double min_applied_fraction = 0.5;

@@ -63,8 +63,7 @@ inline Record stornoway_record(std::uint64_t seed, double minutes, double snr_db
 }
 
 // PRBS (11-bit register, each bit held 3 samples) at Ts = 0.01 s, SNR 10 dB by default.
-inline Record rao_garnier_record(std::uint64_t seed, Eigen::Index samples,
-                                 double snr_db = 10.0) {
+inline Record rao_garnier_record(std::uint64_t seed, Eigen::Index samples, double snr_db = 10.0) {
   signal::PrbsOptions p;
   p.n = samples;
   p.register_length = 11;

@@ -2,11 +2,11 @@
 #include "tests/bench/ident/mc_cases.hpp"
 
 #include <chrono>
-#include <functional>
-#include <utility>
 #include <cmath>
 #include <cstdio>
+#include <functional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "rig/ident/crlb.hpp"
@@ -31,9 +31,10 @@ struct Series {
   }
 };
 
-void print_row(const char* name, double truth, double crlb_std,
-               const std::vector<std::pair<const std::vector<double>*, const std::vector<double>*>>& cols,
-               double scale, const char* unit) {
+void print_row(
+    const char* name, double truth, double crlb_std,
+    const std::vector<std::pair<const std::vector<double>*, const std::vector<double>*>>& cols,
+    double scale, const char* unit) {
   std::printf("  %-6s %8.5f |", name, truth);
   for (const auto& [v, se] : cols) {
     const auto a = stats_of(*v);
@@ -59,9 +60,10 @@ void run_series(Series& s, const char* label, int r, const std::function<void(Se
 void stornoway_mc(const McConfig& cfg) {
   const model::TransferFunction tf = experiments::stornoway_tf();
   const DerivedFigures truth = derived_figures(tf, Eigen::MatrixXd());
-  std::printf("\n== Stornoway-like loop e^{-0.06s}/(0.07s^2+0.19s+11.05): Gaussian 4 Hz, "
-              "100 Hz, SNR 0 dB, %.1f min, %d runs, seed %llu (run r: seed+r), lags %d ==\n",
-              cfg.minutes, cfg.runs, static_cast<unsigned long long>(cfg.seed), cfg.lags);
+  std::printf(
+      "\n== Stornoway-like loop e^{-0.06s}/(0.07s^2+0.19s+11.05): Gaussian 4 Hz, "
+      "100 Hz, SNR 0 dB, %.1f min, %d runs, seed %llu (run r: seed+r), lags %d ==\n",
+      cfg.minutes, cfg.runs, static_cast<unsigned long long>(cfg.seed), cfg.lags);
   Series mm, oe, sr;
   std::vector<double> crlb_fn, crlb_zeta, crlb_gain, crlb_td;
   for (int r = 0; r < cfg.runs; ++r) {
@@ -83,31 +85,37 @@ void stornoway_mc(const McConfig& cfg) {
       SrivcOptions so;
       so.order = {2, 0};
       so.max_delay_s = 0.3;
-      const SrivcResult res = estimate_srivc(rec.u.array() - rec.u.mean(),
-                                             rec.y.array() - rec.y.mean(), rec.dt_s, so);
+      const SrivcResult res =
+          estimate_srivc(rec.u.array() - rec.u.mean(), rec.y.array() - rec.y.mean(), rec.dt_s, so);
       s.add(res.derived, res.delay_s, res.delay_std_s);
     });
     const CramerRaoBound b = cramer_rao_bound(tf, rec.u, rec.dt_s, rec.noise_variance);
     if (cfg.csv) {
       const auto seed = static_cast<unsigned long long>(cfg.seed + r);
       for (const auto& [name, s] : {std::pair<const char*, Series*>{"mmfm", &mm},
-                                    {"mmfm_oe", &oe}, {"srivc", &sr}, {"crlb_std", nullptr}}) {
+                                    {"mmfm_oe", &oe},
+                                    {"srivc", &sr},
+                                    {"crlb_std", nullptr}}) {
         if (s && s->fn.size() != static_cast<size_t>(r + 1 - s->failures)) continue;
-        if (s) std::fprintf(cfg.csv, "stornoway,%d,%llu,%s,%.9g,%.9g,%.9g,%.9g\n", r, seed, name,
-                            s->fn.back(), s->zeta.back(), s->gain.back(), s->td.back());
-        else std::fprintf(cfg.csv, "stornoway,%d,%llu,%s,%.9g,%.9g,%.9g,%.9g\n", r, seed, name,
-                          b.derived.fn_hz_std, b.derived.zeta_std, b.derived.gain_std,
-                          b.std_dev(b.std_dev.size() - 1));
+        if (s)
+          std::fprintf(cfg.csv, "stornoway,%d,%llu,%s,%.9g,%.9g,%.9g,%.9g\n", r, seed, name,
+                       s->fn.back(), s->zeta.back(), s->gain.back(), s->td.back());
+        else
+          std::fprintf(cfg.csv, "stornoway,%d,%llu,%s,%.9g,%.9g,%.9g,%.9g\n", r, seed, name,
+                       b.derived.fn_hz_std, b.derived.zeta_std, b.derived.gain_std,
+                       b.std_dev(b.std_dev.size() - 1));
       }
       std::fflush(cfg.csv);
     }
     crlb_fn.push_back(b.derived.fn_hz_std), crlb_zeta.push_back(b.derived.zeta_std);
     crlb_gain.push_back(b.derived.gain_std), crlb_td.push_back(b.std_dev(b.std_dev.size() - 1));
   }
-  std::printf("  columns: MMFM | MMFM+OE (correlation-domain refinement) | SRIVC. bias, std, "
-              "se (mean reported std error) in %% of truth (Td in ms); eff = CRLB var / MC var\n");
+  std::printf(
+      "  columns: MMFM | MMFM+OE (correlation-domain refinement) | SRIVC. bias, std, "
+      "se (mean reported std error) in %% of truth (Td in ms); eff = CRLB var / MC var\n");
   print_row("fn_hz", truth.fn_hz, stats_of(crlb_fn).mean,
-            {{&mm.fn, &mm.fn_se}, {&oe.fn, &oe.fn_se}, {&sr.fn, &sr.fn_se}}, 100.0 / truth.fn_hz, "%");
+            {{&mm.fn, &mm.fn_se}, {&oe.fn, &oe.fn_se}, {&sr.fn, &sr.fn_se}}, 100.0 / truth.fn_hz,
+            "%");
   print_row("zeta", truth.zeta, stats_of(crlb_zeta).mean,
             {{&mm.zeta, &mm.zeta_se}, {&oe.zeta, &oe.zeta_se}, {&sr.zeta, &sr.zeta_se}},
             100.0 / truth.zeta, "%");
@@ -116,19 +124,22 @@ void stornoway_mc(const McConfig& cfg) {
             100.0 / truth.gain, "%");
   print_row("Td_s", tf.delay_s, stats_of(crlb_td).mean,
             {{&mm.td, &mm.td_se}, {&oe.td, &oe.td_se}, {&sr.td, &sr.td_se}}, 1000.0, "ms");
-  std::printf("  failures: MMFM %d, MMFM+OE %d, SRIVC %d; time per run: MMFM %.3f s, "
-              "MMFM+OE %.3f s, SRIVC %.3f s\n", mm.failures, oe.failures, sr.failures,
-              mm.seconds / cfg.runs, oe.seconds / cfg.runs, sr.seconds / cfg.runs);
+  std::printf(
+      "  failures: MMFM %d, MMFM+OE %d, SRIVC %d; time per run: MMFM %.3f s, "
+      "MMFM+OE %.3f s, SRIVC %.3f s\n",
+      mm.failures, oe.failures, sr.failures, mm.seconds / cfg.runs, oe.seconds / cfg.runs,
+      sr.seconds / cfg.runs);
   std::fflush(stdout);
 }
 
 void rao_garnier_mc(const McConfig& cfg) {
   const model::TransferFunction tf = experiments::rao_garnier_tf();
   const Eigen::Index samples = 2 * 2047 * 3;
-  std::printf("\n== Rao-Garnier (-6400s+1600)/(s^4+5s^3+408s^2+416s+1600): PRBS 11 bit x3, "
-              "Ts 0.01 s, %lld samples, SNR 10 dB, %d runs, seed %llu (run r: seed+r), "
-              "Td = 0 known ==\n",
-              static_cast<long long>(samples), cfg.runs, static_cast<unsigned long long>(cfg.seed));
+  std::printf(
+      "\n== Rao-Garnier (-6400s+1600)/(s^4+5s^3+408s^2+416s+1600): PRBS 11 bit x3, "
+      "Ts 0.01 s, %lld samples, SNR 10 dB, %d runs, seed %llu (run r: seed+r), "
+      "Td = 0 known ==\n",
+      static_cast<long long>(samples), cfg.runs, static_cast<unsigned long long>(cfg.seed));
   const Eigen::VectorXd truth = pack_parameters(tf).tail(6);  // a3..a0, b1, b0
   const char* names[] = {"a3", "a2", "a1", "a0", "b1", "b0"};
   std::vector<std::vector<double>> est[3];
@@ -160,8 +171,9 @@ void rao_garnier_mc(const McConfig& cfg) {
     so.order = {4, 1};
     so.delay_s = 0.0;
     try {
-      keep(2, estimate_srivc(rec.u.array() - rec.u.mean(), rec.y.array() - rec.y.mean(),
-                             rec.dt_s, so).model);
+      keep(2,
+           estimate_srivc(rec.u.array() - rec.u.mean(), rec.y.array() - rec.y.mean(), rec.dt_s, so)
+               .model);
     } catch (const std::exception& e) {
       ++fails[2];
       std::printf("  run %d SRIVC failed: %s\n", r, e.what());
@@ -187,8 +199,8 @@ void rao_garnier_mc(const McConfig& cfg) {
 namespace {
 
 void print_order_table(const char* title, const IdentifyResult& r) {
-  std::printf(" %s: chosen %d/%d, validation fit %.2f %%, Td %.4f s\n", title, r.order.n,
-              r.order.m, r.validation_fit_pct, r.delay_s);
+  std::printf(" %s: chosen %d/%d, validation fit %.2f %%, Td %.4f s\n", title, r.order.n, r.order.m,
+              r.validation_fit_pct, r.delay_s);
   std::printf("   %-6s %10s %12s %10s %10s\n", "order", "est fit %", "valid fit %", "score",
               "Td (s)");
   for (const OrderScore& s : r.order_table)
@@ -199,9 +211,11 @@ void print_order_table(const char* title, const IdentifyResult& r) {
 }  // namespace
 
 void order_tables(const McConfig& cfg) {
-  std::printf("\n== Model-order selection (seed 001 style): estimate on the first half, "
-              "validate on the second, score = validation fit - 0.1 %% per parameter; "
-              "seed %llu ==\n", static_cast<unsigned long long>(cfg.seed));
+  std::printf(
+      "\n== Model-order selection (seed 001 style): estimate on the first half, "
+      "validate on the second, score = validation fit - 0.1 %% per parameter; "
+      "seed %llu ==\n",
+      static_cast<unsigned long long>(cfg.seed));
   const auto st = experiments::stornoway_record(cfg.seed, cfg.minutes);
   IdentifyOptions io;
   io.correlator.lags = cfg.lags;

@@ -5,8 +5,8 @@
 // Plant: H(s) = K wn^2 / (s^2 + 2 zeta wn s + wn^2), fn = 2 Hz, zeta = 0.1, K = 1, no delay
 // (thesis 5-2: "it was not possible to simulate the time delay"). Gaussian excitation of
 // bandwidth f_max = 5 Hz (the thesis' frequency range of interest, 0.5-5 Hz), white output
-// noise at SNR 10 dB. Sampled at fs = 200 Hz so that the slow rate fs/skip stays >= 2 f_max = 10 Hz up to
-// skip 16 (12.5 Hz) and falls below it at skip 32 (6.25 Hz), as the thesis found.
+// noise at SNR 10 dB. Sampled at fs = 200 Hz so that the slow rate fs/skip stays >= 2 f_max = 10 Hz
+// up to skip 16 (12.5 Hz) and falls below it at skip 32 (6.25 Hz), as the thesis found.
 //
 // Each block is correlated on its own (the thesis downloaded 2048-sample blocks and formed
 // 1600 products per lag at skip 1), with relay correlation and the given skip, and the block
@@ -40,12 +40,12 @@ namespace rig::ident::experiments {
 struct SkipSetup {
   double fn_hz = 2.0, zeta = 0.1, gain = 1.0;
   double fs_hz = 200.0;
-  double f_max_hz = 5.0;         // excitation bandwidth = highest frequency of interest
-  double snr_db = 10.0;          // output noise: var(y0) / var(noise), dB
-  Eigen::Index lags = 1024;      // two-sided window (5.12 s at 200 Hz)
-  Eigen::Index zero_index = 307; // 30 % into the window (thesis 5-1-1: best 30-60 %)
-  Eigen::Index products = 1600;  // per lag per block at skip 1 (thesis: 1600)
-  int blocks = 20;               // block correlations averaged (thesis: twenty)
+  double f_max_hz = 5.0;          // excitation bandwidth = highest frequency of interest
+  double snr_db = 10.0;           // output noise: var(y0) / var(noise), dB
+  Eigen::Index lags = 1024;       // two-sided window (5.12 s at 200 Hz)
+  Eigen::Index zero_index = 307;  // 30 % into the window (thesis 5-1-1: best 30-60 %)
+  Eigen::Index products = 1600;   // per lag per block at skip 1 (thesis: 1600)
+  int blocks = 20;                // block correlations averaged (thesis: twenty)
 
   double dt_s() const { return 1.0 / fs_hz; }
   Eigen::Index block_samples() const { return products + lags - 1; }
@@ -71,8 +71,9 @@ inline Record skip_record(const SkipSetup& s, std::uint64_t seed) {
 }
 
 // Relay auto- and cross-correlation with Fell's skip, each block on its own, then averaged.
-inline std::pair<signal::Correlation, signal::Correlation> skip_correlations(
-    const Record& rec, const SkipSetup& s, int skip) {
+inline std::pair<signal::Correlation, signal::Correlation> skip_correlations(const Record& rec,
+                                                                             const SkipSetup& s,
+                                                                             int skip) {
   signal::CorrelatorOptions o;
   o.lags = s.lags;
   o.zero_index = s.zero_index;

@@ -11,9 +11,8 @@ namespace rig::ident {
 namespace {
 
 const testing::CorrelationPair& pair() {
-  static const testing::CorrelationPair p =
-      testing::triangle_pair(testing::make_tf({1.0}, {0.07, 0.19, 11.05}, 0.06), 0.02, 0.01,
-                             256, 102);
+  static const testing::CorrelationPair p = testing::triangle_pair(
+      testing::make_tf({1.0}, {0.07, 0.19, 11.05}, 0.06), 0.02, 0.01, 256, 102);
   return p;
 }
 
@@ -27,7 +26,8 @@ MmfmSettings settings_8() {
 
 void BM_MmfmSolve8Functions(benchmark::State& state) {
   const MmfmSettings st = settings_8();
-  for (auto _ : state) benchmark::DoNotOptimize(mmfm_solve(pair().ruu, pair().ryu, {2, 0}, 0.06, st));
+  for (auto _ : state)
+    benchmark::DoNotOptimize(mmfm_solve(pair().ruu, pair().ryu, {2, 0}, 0.06, st));
 }
 BENCHMARK(BM_MmfmSolve8Functions);
 

@@ -25,10 +25,11 @@ Eigen::VectorXd times_dominant_pair(const Eigen::VectorXd& other) {
 
 void print_fit(const char* label, const MmfmResult& r) {
   const model::TransferFunction m = model::monic(r.model);
-  std::printf("  %-14s a1 %8.4f  a0 %8.4f  b0 %8.4f | fn %6.4f Hz zeta %6.4f gain %6.4f "
-              "| Td %6.4f s | corr fit %6.2f %%\n",
-              label, m.den(1), m.den(2), m.num(m.num.size() - 1), r.derived.fn_hz,
-              r.derived.zeta, r.derived.gain, r.delay_s, r.correlation_fit_pct);
+  std::printf(
+      "  %-14s a1 %8.4f  a0 %8.4f  b0 %8.4f | fn %6.4f Hz zeta %6.4f gain %6.4f "
+      "| Td %6.4f s | corr fit %6.2f %%\n",
+      label, m.den(1), m.den(2), m.num(m.num.size() - 1), r.derived.fn_hz, r.derived.zeta,
+      r.derived.gain, r.delay_s, r.correlation_fit_pct);
 }
 
 void fit_second_order(const char* label, const model::TransferFunction& plant) {
@@ -61,8 +62,9 @@ void noise_free_table() {
       {"4/1 pairs", make_tf({10.0, 290.0}, {1.0, 6.0, 47.0, 98.0, 290.0}), {4, 1}},
       {"4/2", make_tf({2.0, 10.0, 290.0}, {1.0, 6.0, 47.0, 98.0, 290.0}), {4, 2}},
   };
-  std::printf("\n== Noise-free MMFM (thesis 5-1): triangle half-width 0.05 s, dt 0.01 s, "
-              "1000 lags, zero at 400 ==\n");
+  std::printf(
+      "\n== Noise-free MMFM (thesis 5-1): triangle half-width 0.05 s, dt 0.01 s, "
+      "1000 lags, zero at 400 ==\n");
   std::printf("  %-20s %-8s %14s %14s %12s %10s\n", "system", "solver", "max |rel err|",
               "Td est (s)", "cond", "S (s)");
   for (const Row& r : rows) {
@@ -84,8 +86,9 @@ void noise_free_table() {
 }
 
 void zero_shift_table() {
-  std::printf("\n== Thesis 5-1-1: zero-lag position within a 400-lag window (dt 0.02 s), "
-              "noise-free, auto scale/centres; max |rel err| of the coefficients ==\n");
+  std::printf(
+      "\n== Thesis 5-1-1: zero-lag position within a 400-lag window (dt 0.02 s), "
+      "noise-free, auto scale/centres; max |rel err| of the coefficients ==\n");
   std::printf("  %-10s %16s %16s %16s\n", "zero at", "1/0 4/(s+2)", "2/0 10/(..)", "S (2/0, s)");
   for (double frac : {0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8}) {
     const auto zi = static_cast<Eigen::Index>(frac * 400);
@@ -113,9 +116,10 @@ void zero_shift_table() {
 }
 
 void thesis_513_table() {
-  std::printf("\n== Thesis 5-1-3: dominant pair -1+-3j, unit DC gain, fitted 2/0 (monic); "
-              "true a1 2, a0 10, b0 10, fn %.4f Hz, zeta %.4f ==\n",
-              std::sqrt(10.0) / (2 * M_PI), 1.0 / std::sqrt(10.0));
+  std::printf(
+      "\n== Thesis 5-1-3: dominant pair -1+-3j, unit DC gain, fitted 2/0 (monic); "
+      "true a1 2, a0 10, b0 10, fn %.4f Hz, zeta %.4f ==\n",
+      std::sqrt(10.0) / (2 * M_PI), 1.0 / std::sqrt(10.0));
   std::printf(" third order, real pole at -p:\n");
   for (double p : {20.0, 10.0, 5.0, 3.0, 2.0, 1.0}) {
     const model::TransferFunction plant{Eigen::VectorXd::Constant(1, 10.0 * p),

@@ -1,7 +1,7 @@
 // The session's compare phase and `rig compare` on the files the session wrote judge the same
 // swept-sine points. Before the FRF file kept the estimator's `valid` verdict, a noisy run
-// (meas.noise_kw=15 from t=0) was judged on 7 points by the session and on 12 by `rig compare` on its
-// sweep.csv (worst phase error 3.3 against 7.4 deg).
+// (meas.noise_kw=15 from t=0) was judged on 7 points by the session and on 12 by `rig compare` on
+// its sweep.csv (worst phase error 3.3 against 7.4 deg).
 #include <fmt/format.h>
 #include <gtest/gtest.h>
 

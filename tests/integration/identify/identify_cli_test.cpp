@@ -48,7 +48,8 @@ std::filesystem::path write_plant_recording(const std::filesystem::path& dir, Ei
   meta.seed = kSeed;
   const auto csv = dir / "rec.csv";
   io::RecordingWriter writer(csv, {"t", "u", "y"}, meta);
-  for (Eigen::Index i = 0; i < n; ++i) writer.append({kDt * double(i), u[i], 3500.0 + y[i] + noise(rng)});
+  for (Eigen::Index i = 0; i < n; ++i)
+    writer.append({kDt * double(i), u[i], 3500.0 + y[i] + noise(rng)});
   writer.close();
   return csv;
 }
@@ -57,7 +58,8 @@ TEST(IdentifyCli, RecoversSecondOrderPlantWithDeadTime) {
   const auto dir = scratch("plant");
   const auto csv = write_plant_recording(dir, 16384);
   const auto r = run_rig("identify --recording " + csv.string() + " --order 2/0 --json --out " +
-                             (dir / "out").string(), dir);
+                             (dir / "out").string(),
+                         dir);
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const auto rep = nlohmann::json::parse(r.out);
   std::cout << "seed " << kSeed << ": " << rep["derived"].dump() << " delay " << rep["delay"].dump()
@@ -86,8 +88,9 @@ TEST(IdentifyCli, RecoversSecondOrderPlantWithDeadTime) {
 TEST(IdentifyCli, HumanSummaryWithoutJson) {
   const auto dir = scratch("summary");
   const auto csv = write_plant_recording(dir, 4096);
-  const auto r = run_rig("identify --recording " + csv.string() + " --order 2/0 --delay 0.1 --out " +
-                             (dir / "out").string(), dir);
+  const auto r = run_rig("identify --recording " + csv.string() +
+                             " --order 2/0 --delay 0.1 --out " + (dir / "out").string(),
+                         dir);
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_NE(r.out.find("dead time 0.1"), std::string::npos) << r.out;
   EXPECT_NE(r.out.find("validation fit"), std::string::npos) << r.out;
@@ -97,7 +100,8 @@ TEST(IdentifyCli, SwappedChannelsFailTheDataQualityChecks) {
   const auto dir = scratch("swapped");
   const auto csv = write_plant_recording(dir, 8192);
   const auto r = run_rig("identify --recording " + csv.string() +
-                             " --input y --output u --order 2/0 --out " + (dir / "out").string(), dir);
+                             " --input y --output u --order 2/0 --out " + (dir / "out").string(),
+                         dir);
   EXPECT_EQ(r.exit_code, 1) << r.out << r.err;
   EXPECT_NE(r.err.find("swapped"), std::string::npos) << r.err;
   const auto rep = nlohmann::json::parse(testing::slurp(dir / "out" / "report.json"));
@@ -122,10 +126,13 @@ TEST(IdentifyCli, MismatchedCouplingNetworksFailTheDataQualityChecks) {
   meta.coupling_rc_s = 1.59;
   meta.coupled_columns = {"u_ac", "y_ac"};
   io::RecordingWriter writer(dir / "rec.csv", {"t", "u", "y", "u_ac", "y_ac"}, meta);
-  for (Eigen::Index i = 0; i < g.n; ++i) writer.append({kDt * double(i), u[i], y[i], u_ac[i], y_ac[i]});
+  for (Eigen::Index i = 0; i < g.n; ++i)
+    writer.append({kDt * double(i), u[i], y[i], u_ac[i], y_ac[i]});
   writer.close();
-  const auto r = run_rig("identify --recording " + (dir / "rec.csv").string() +
-                             " --input u_ac --output y_ac --order 2/0 --json --out " + (dir / "out").string(), dir);
+  const auto r =
+      run_rig("identify --recording " + (dir / "rec.csv").string() +
+                  " --input u_ac --output y_ac --order 2/0 --json --out " + (dir / "out").string(),
+              dir);
   EXPECT_EQ(r.exit_code, 1) << r.err;
   const auto rep = nlohmann::json::parse(r.out);
   ASSERT_FALSE(rep["quality"]["flags"].empty());
@@ -138,10 +145,12 @@ TEST(IdentifyCli, DryerValidationFitOnSecondHalf) {
   const char* shared = std::getenv("RIG_SHARED_DIR");
   const std::filesystem::path dryer =
       std::filesystem::path(shared ? shared : "") / "data" / "daisy" / "dryer.dat";
-  if (!shared || !std::filesystem::exists(dryer)) GTEST_SKIP() << "RIG_SHARED_DIR has no daisy/dryer.dat";
+  if (!shared || !std::filesystem::exists(dryer))
+    GTEST_SKIP() << "RIG_SHARED_DIR has no daisy/dryer.dat";
   const auto dir = scratch("dryer");
-  const auto r = run_rig("identify --recording " + dryer.string() + " --columns 1,2 --dt 0.08 --json --out " +
-                             (dir / "out").string(), dir);
+  const auto r = run_rig("identify --recording " + dryer.string() +
+                             " --columns 1,2 --dt 0.08 --json --out " + (dir / "out").string(),
+                         dir);
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const auto rep = nlohmann::json::parse(r.out);
   const double fit = rep["validation_fit_pct"].get<double>();
@@ -166,10 +175,13 @@ TEST(IdentifyCli, CascadedTanksClippedOutputIsFlaggedButCausalityHolds) {
   const char* shared = std::getenv("RIG_SHARED_DIR");
   const std::filesystem::path csv = std::filesystem::path(shared ? shared : "") / "data" /
                                     "nonlinear_benchmarks" / "cascaded_tanks" / "dataBenchmark.csv";
-  if (!shared || !std::filesystem::exists(csv)) GTEST_SKIP() << "RIG_SHARED_DIR has no cascaded_tanks";
+  if (!shared || !std::filesystem::exists(csv))
+    GTEST_SKIP() << "RIG_SHARED_DIR has no cascaded_tanks";
   const auto dir = scratch("tanks");
-  const auto r = run_rig("identify --recording " + csv.string() +
-                             " --input uEst --output yEst --order 2/0 --json --out " + (dir / "out").string(), dir);
+  const auto r =
+      run_rig("identify --recording " + csv.string() +
+                  " --input uEst --output yEst --order 2/0 --json --out " + (dir / "out").string(),
+              dir);
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const auto rep = nlohmann::json::parse(r.out);
   EXPECT_EQ(rep["recording"]["dt_s"], 4.0);

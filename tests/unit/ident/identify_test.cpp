@@ -1,8 +1,9 @@
-#include <cmath>
+#include "rig/ident/identify.hpp"
 
 #include <gtest/gtest.h>
 
-#include "rig/ident/identify.hpp"
+#include <cmath>
+
 #include "tests/bench/ident/ident_experiments.hpp"
 
 namespace rig::ident {

@@ -1,10 +1,11 @@
-#include <cmath>
-#include <vector>
+#include "rig/ident/mmfm.hpp"
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <vector>
+
 #include "analytic_correlations.hpp"
-#include "rig/ident/mmfm.hpp"
 
 namespace rig::ident {
 namespace {
@@ -109,7 +110,8 @@ TEST(Mmfm, ThesisModelOrderEffectOfAFarPole) {
   opt.max_delay_s = 0.3;
   const MmfmResult with_delay = estimate_mmfm(p.ruu, p.ryu, opt);
   EXPECT_LT(no_delay.derived.fn_hz, 0.98 * fn_true);
-  EXPECT_LT(std::abs(with_delay.derived.fn_hz - fn_true), 0.5 * std::abs(no_delay.derived.fn_hz - fn_true));
+  EXPECT_LT(std::abs(with_delay.derived.fn_hz - fn_true),
+            0.5 * std::abs(no_delay.derived.fn_hz - fn_true));
   EXPECT_NEAR(with_delay.delay_s, 0.05, 0.01);  // about the 1/20 s lag of the far pole
   EXPECT_GT(with_delay.correlation_fit_pct, no_delay.correlation_fit_pct);
 }

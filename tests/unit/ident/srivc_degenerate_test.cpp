@@ -53,8 +53,10 @@ TEST(SrivcDegenerate, DryerRecordAutomaticOrderAndDelay) {
   double a = 0, b = 0;
   while (in >> a >> b) uv.push_back(a), yv.push_back(b);
   ASSERT_EQ(uv.size(), 1000u);
-  const Eigen::VectorXd u = Eigen::Map<Eigen::VectorXd>(uv.data(), static_cast<Eigen::Index>(uv.size()));
-  const Eigen::VectorXd y = Eigen::Map<Eigen::VectorXd>(yv.data(), static_cast<Eigen::Index>(yv.size()));
+  const Eigen::VectorXd u =
+      Eigen::Map<Eigen::VectorXd>(uv.data(), static_cast<Eigen::Index>(uv.size()));
+  const Eigen::VectorXd y =
+      Eigen::Map<Eigen::VectorXd>(yv.data(), static_cast<Eigen::Index>(yv.size()));
   IdentifyOptions opt;
   opt.method = IdentMethod::kSrivc;
   opt.correlator.lags = 125;  // min(256, N / 8), as rig identify chooses

@@ -1,9 +1,10 @@
-#include <cmath>
+#include "rig/ident/srivc.hpp"
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+
 #include "rig/ident/crlb.hpp"
-#include "rig/ident/srivc.hpp"
 #include "tests/bench/ident/ident_experiments.hpp"
 
 namespace rig::ident {
@@ -54,10 +55,14 @@ TEST(Crlb, SensitivitiesMatchFiniteDifferences) {
   for (int c = 0; c < 5; ++c) {
     const double h = c == 4 ? 1e-4 : 1e-5 * std::max(1.0, std::abs(pack_parameters(tf)(c + 1)));
     model::TransferFunction hi = tf, lo = tf;
-    if (c < 2) hi.den(c + 1) += h, lo.den(c + 1) -= h;
-    else if (c < 4) hi.num(c - 2) += h, lo.num(c - 2) -= h;
-    else hi.delay_s += h, lo.delay_s -= h;
-    const Eigen::VectorXd fd = (simulate(hi, rec.u, rec.dt_s) - simulate(lo, rec.u, rec.dt_s)) / (2 * h);
+    if (c < 2)
+      hi.den(c + 1) += h, lo.den(c + 1) -= h;
+    else if (c < 4)
+      hi.num(c - 2) += h, lo.num(c - 2) -= h;
+    else
+      hi.delay_s += h, lo.delay_s -= h;
+    const Eigen::VectorXd fd =
+        (simulate(hi, rec.u, rec.dt_s) - simulate(lo, rec.u, rec.dt_s)) / (2 * h);
     // The a_i columns filter the sampled output as if piecewise linear between samples, an
     // O((w dt)^2 / 12) ~ 1.3e-3 relative error at the 2 Hz mode; b_i and Td are exact.
     EXPECT_LT((fd - j.col(c)).norm(), (c < 2 ? 3e-3 : 1e-4) * j.col(c).norm()) << "column " << c;

@@ -1,9 +1,9 @@
 // A small seeded version of the Stornoway Monte Carlo (the full 200-run table is
 // bench_ident_mc --case stornoway): 10-minute records at SNR 0 dB, seeds 100..105.
+#include <gtest/gtest.h>
+
 #include <cmath>
 #include <vector>
-
-#include <gtest/gtest.h>
 
 #include "rig/ident/identify.hpp"
 #include "tests/bench/ident/ident_experiments.hpp"

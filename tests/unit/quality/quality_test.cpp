@@ -54,7 +54,8 @@ QualityOptions options() {
 
 std::string describe(const QualityReport& rep) {
   std::string s = "seed " + std::to_string(kSeed) + "; flags:";
-  for (const auto& f : rep.flags) s += " [" + f.name + " " + to_string(f.severity) + ": " + f.message + "]";
+  for (const auto& f : rep.flags)
+    s += " [" + f.name + " " + to_string(f.severity) + ": " + f.message + "]";
   s += " figures:";
   for (const auto& [k, v] : rep.figures) s += " " + k + "=" + std::to_string(v);
   return s;
@@ -131,7 +132,8 @@ TEST(Quality, ClippedOutputAndInputAreFlagged) {
   EXPECT_EQ(rep.find("input_clipped"), nullptr);
 
   const Eigen::VectorXd u_clipped = u.cwiseMax(-1.0).cwiseMin(1.0);  // +-1 sigma: 32 % clipped
-  const QualityReport rep_u = check_quality(u_clipped, simulate(plant(), u_clipped, kDt), kDt, options());
+  const QualityReport rep_u =
+      check_quality(u_clipped, simulate(plant(), u_clipped, kDt), kDt, options());
   ASSERT_NE(rep_u.find("input_clipped"), nullptr) << describe(rep_u);
   EXPECT_EQ(rep_u.find("input_clipped")->severity, Severity::kFatal);
 }

@@ -1,10 +1,11 @@
+#include "rig/session/online_mmfm.hpp"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <random>
 
 #include "rig/model/transfer_function.hpp"
-#include "rig/session/online_mmfm.hpp"
 #include "rig/session/pilot.hpp"
 #include "rig/signal/excitation.hpp"
 
