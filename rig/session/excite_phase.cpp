@@ -44,6 +44,19 @@ OnlineMmfmOptions online_options(const TestConfig& c) {
   return o;
 }
 
+// The dominant mode for the supervisor and the sweep: the chosen model's second-order
+// figures, or the second-order candidate's when a richer structure was chosen; 0 if neither.
+double dominant_mode_hz(const ExcitationResult& x) {
+  if (x.mmfm && x.mmfm->derived.valid) return x.mmfm->derived.fn_hz;
+  if (!x.order_choice) return 0.0;
+  for (const auto& c : x.order_choice->candidates) {
+    if (!c.ok || !(c.order == model::ModelOrder{2, 0})) continue;
+    const ident::DerivedFigures d = ident::derived_figures(c.model, Eigen::MatrixXd());
+    if (d.valid) return d.fn_hz;
+  }
+  return 0.0;
+}
+
 class ExcitePhase final : public SupervisedPhase {
  public:
   const char* name() const override { return "excite"; }
@@ -106,9 +119,7 @@ class ExcitePhase final : public SupervisedPhase {
     ExcitationResult& x = ctx.data.excitation;
     ctx.off_loop([&] { analyse_excitation(*online_, record_, ctx.config, x); });
     if (!x.mmfm_error.empty()) ctx.loop.event("warning", "MMFM estimate failed: " + x.mmfm_error);
-    if (x.mmfm && x.mmfm->derived.valid && x.mmfm->derived.fn_hz > 0.0) {
-      ctx.resonance_hz = x.mmfm->derived.fn_hz;
-    }
+    if (const double fn = dominant_mode_hz(x); fn > 0.0) ctx.resonance_hz = fn;
     if (!completed) return false;
     ctx.view.message(
         fmt::format("excitation: {:.0f} s, applied std {:.3f} % of {:.3f} % planned, "

@@ -87,12 +87,13 @@ class PilotPhase final : public SupervisedPhase {
       return false;
     }
     ctx.data.excitation.planned_std_pct = p.planned_std_pct;
-    if (c.excitation.type == ExcitationType::kShaped) plan_shaped(ctx);
     ctx.view.message(fmt::format(
         "pilot: gain {:.1f} kW/%, planned excitation std {:.3f} % (predicted peak {:.1f} of "
         "{:.1f} kW){}",
         p.gain_kw_per_pct, p.planned_std_pct, p.predicted_peak_kw, limits.band_kw,
         p.limited_by_clamp ? ", limited by the clamp" : ""));
+    ctx.data.excitation.type = to_string(c.excitation.type);
+    if (c.excitation.type == ExcitationType::kShaped) plan_shaped(ctx);
     return true;
   }
 
@@ -115,6 +116,7 @@ class PilotPhase final : public SupervisedPhase {
     if (!d.ok) {
       ctx.loop.event("warning", "shaped excitation not designed (" + d.reason +
                                     "); the Gaussian plan is used");
+      ctx.data.excitation.type = to_string(ExcitationType::kGaussian);
       return;
     }
     ctx.data.excitation.planned_std_pct = d.std_pct;
@@ -123,6 +125,7 @@ class PilotPhase final : public SupervisedPhase {
         "output {:.2f}, predicted peak {:.1f} of {:.1f} kW{}",
         d.lines, d.f_lo_hz, d.f_hi_hz, d.std_pct, d.input_crest, d.output_crest,
         d.predicted_peak_kw, l.band_kw, d.limited_by_clamp ? ", limited by the clamp" : ""));
+    ctx.data.excitation.shaped = d;
     ctx.shaped = std::move(d);
   }
 

@@ -24,6 +24,7 @@
 #include "rig/io/exit_code.hpp"
 #include "rig/session/online_mmfm.hpp"
 #include "rig/session/pilot.hpp"
+#include "rig/session/shaped_excitation.hpp"
 #include "rig/session/steady_state.hpp"
 #include "rig/session/supervisor.hpp"
 #include "rig/session/test_config.hpp"
@@ -58,6 +59,7 @@ struct ActivationResult {
 
 // The excitation phase with online MMFM.
 struct ExcitationResult {
+  std::string type;              // the excitation actually used: shaped, gaussian or prbs
   double planned_std_pct = 0.0;  // from the pilot's amplitude plan
   double applied_std_pct = 0.0;  // measured std of u over the excitation (after supervisor)
   double duration_s = 0.0;
@@ -69,6 +71,8 @@ struct ExcitationResult {
   std::string mmfm_error;
   signal::Correlation ruu, ryu;     // online correlations (AC-coupled)
   std::vector<model::FrfPoint> h1;  // noise-driven FRF of the excitation record
+  // The shaped multisine's design (docs/excitation.md), when one was used.
+  std::optional<ShapedDesign> shaped;
 };
 
 // Everything the report is made of: the run, one result per phase, the loop's record and the

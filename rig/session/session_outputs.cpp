@@ -63,6 +63,23 @@ json frf_json(const std::vector<model::FrfPoint>& frf) {
   return a;
 }
 
+json shaped_json(const std::optional<ShapedDesign>& d) {
+  if (!d) return nullptr;
+  return {{"lines", d->lines},
+          {"from_hz", d->f_lo_hz},
+          {"to_hz", d->f_hi_hz},
+          {"period_s", static_cast<double>(d->period_pct.size()) * d->dt_s},
+          {"std_pct", d->std_pct},
+          {"input_crest", d->input_crest},
+          {"output_crest", d->output_crest},
+          {"predicted_peak_kw", d->predicted_peak_kw},
+          {"limited_by_clamp", d->limited_by_clamp},
+          {"pilot_model",
+           {{"num", report::to_json_array(d->pilot_model.num)},
+            {"den", report::to_json_array(d->pilot_model.den)},
+            {"delay_s", d->pilot_model.delay_s}}}};
+}
+
 json candidates_json(const std::optional<ident::OrderChoice>& choice) {
   json a = json::array();
   if (!choice) return a;
@@ -208,7 +225,9 @@ json report_json(const SessionData& d) {
                                : json(nullptr)},
       {"duration_s", d.excitation.duration_s},
       {"stop_reason", d.excitation.stop_reason},
-      {"quality_flags", d.excitation.quality_flags}};
+      {"quality_flags", d.excitation.quality_flags},
+      {"type", d.excitation.type},
+      {"shaped", shaped_json(d.excitation.shaped)}};
   j["model_written"] = d.excitation.mmfm.has_value() && d.exit_code == kExitOk;
   j["model_rejected"] = d.model_rejected;
   j["activation"] = d.activation ? json{{"acknowledged", d.activation->acknowledged},

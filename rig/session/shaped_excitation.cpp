@@ -125,6 +125,7 @@ Eigen::VectorXd repeat_period(const Eigen::VectorXd& period, Eigen::Index n) {
 ShapedDesign design_shaped_excitation(const std::vector<double>& pilot_u,
                                       const std::vector<double>& pilot_y, const ShapedLimits& l) {
   ShapedDesign d;
+  d.dt_s = l.dt_s;
   try {
     d.pilot_model = pilot_model(pilot_u, pilot_y, l);
   } catch (const std::exception& e) {

@@ -50,6 +50,7 @@ struct ShapedDesign {
   bool ok = false;
   std::string reason;  // why not, when !ok
   model::TransferFunction pilot_model;
+  double dt_s = 0.0;           // sample period of period_pct
   Eigen::VectorXd period_pct;  // one period of the excitation, scaled (% of rated power)
   int lines = 0;
   double f_lo_hz = 0.0, f_hi_hz = 0.0;
