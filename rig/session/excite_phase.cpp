@@ -72,6 +72,7 @@ class ExcitePhase final : public SupervisedPhase {
     if (ctx.shaped) oo.prior = ctx.shaped->pilot_model;
     online_.emplace(oo);
     max_n_ = std::lround(c.mmfm.max_duration_s * rate);
+    online_->reserve(max_n_ + std::lround(kFadeOutS * rate));
     min_n_ = std::lround(c.mmfm.min_duration_s * rate);
     fade_n_ = std::lround(kFadeOutS * rate);
     k_stop_ = max_n_;

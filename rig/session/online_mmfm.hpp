@@ -22,6 +22,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <algorithm>
 #include <future>
 #include <optional>
 #include <string>
@@ -85,6 +86,18 @@ class OnlineMmfm {
   // Waits for the estimate in flight and any pending one (asynchronous mode); history(),
   // converged() and final_result() then cover every completed block.
   void finish();
+  // Room for this many samples of record, so that push() never reallocates on the loop
+  // thread (a realtime tick must not copy the whole record).
+  // Exponential averaging keeps at most (2W + 1) blocks, so no more is reserved.
+  void reserve(Eigen::Index samples) {
+    if (options_.exponential) {
+      samples = std::min<Eigen::Index>(
+          samples, static_cast<Eigen::Index>((2.0 * options_.weight + 1.0) *
+                                             static_cast<double>(options_.block_samples)));
+    }
+    u_.reserve(static_cast<std::size_t>(samples));
+    y_.reserve(static_cast<std::size_t>(samples));
+  }
 
   bool converged() const;  // latest finished estimate's band is within the targets
   const std::vector<BlockEstimate>& history() const { return history_; }
