@@ -12,6 +12,7 @@ int main(int argc, char** argv) {
   rig::cli::add_commission_command(app);
   rig::cli::add_sweep_command(app);
   rig::cli::add_compare_command(app);
+  rig::cli::add_monitor_command(app);
   rig::cli::add_identify_command(app);
   rig::cli::add_diagnose_command(app);
   return rig::cli::run_app(app, argc, argv);

@@ -11,6 +11,7 @@
 #include "rig/cli/commands.hpp"
 #include "rig/io/input_error.hpp"
 #include "rig/io/out_dir.hpp"
+#include "rig/monitor/history.hpp"
 #include "rig/session/test_config.hpp"
 
 namespace rig::cli {
@@ -49,6 +50,8 @@ int run_app(CLI::App& app, int argc, char** argv) {
   } catch (const io::InputError& e) {
     return report(app, e.what(), kExitUsage);
   } catch (const std::invalid_argument& e) {
+    return report(app, e.what(), kExitUsage);
+  } catch (const monitor::HistoryError& e) {
     return report(app, e.what(), kExitUsage);
   } catch (const std::filesystem::filesystem_error& e) {
     return report(app, e.what(), kExitUsage);

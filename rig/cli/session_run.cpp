@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <functional>
 #include <memory>
 
 #include "rig/io/out_dir.hpp"
@@ -94,7 +95,8 @@ session::TestConfig load_config(const SessionArgs& args, const std::string& /*co
   return c;
 }
 
-int run_session(const SessionArgs& args, session::TestConfig config, const std::string& command) {
+int with_session(const SessionArgs& args, const std::string& command,
+                 const std::function<int(const session::SessionOptions&)>& body) {
   install_abort_handler();
   io::prepare_out_dir(args.out_dir, args.force);  // before plantsim or the governor
   std::unique_ptr<session::EmulatedPlant> plant;
@@ -123,16 +125,23 @@ int run_session(const SessionArgs& args, session::TestConfig config, const std::
     o.preset = args.preset;
     o.plant_seed = args.seed;
   }
-  const session::SessionData d = session::run_commission(config, o);
+  const int code = body(o);
   if (plant) plant->stop();
-  if (args.json) {
-    fmt::print("{}\n", session::report_json(d).dump(2));
-  } else {
-    print_summary(d, args.out_dir);
-  }
-  // Scripts and people watching stderr see why it stopped in one line.
-  if (d.exit_code != kExitOk) fmt::print(stderr, "rig {}: {}\n", command, d.outcome);
-  return d.exit_code;
+  return code;
+}
+
+int run_session(const SessionArgs& args, session::TestConfig config, const std::string& command) {
+  return with_session(args, command, [&](const session::SessionOptions& o) {
+    const session::SessionData d = session::run_commission(config, o);
+    if (args.json) {
+      fmt::print("{}\n", session::report_json(d).dump(2));
+    } else {
+      print_summary(d, args.out_dir);
+    }
+    // Scripts and people watching stderr see why it stopped in one line.
+    if (d.exit_code != kExitOk) fmt::print(stderr, "rig {}: {}\n", command, d.outcome);
+    return d.exit_code;
+  });
 }
 
 }  // namespace rig::cli

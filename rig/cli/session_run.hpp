@@ -4,11 +4,17 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <functional>
 #include <optional>
 #include <string>
 #include <vector>
 
+#include "rig/session/session.hpp"
 #include "rig/session/test_config.hpp"
+
+namespace CLI {
+class App;
+}
 
 namespace rig::cli {
 
@@ -27,9 +33,18 @@ struct SessionArgs {
   bool force = false;  // clear a non-empty --out first
 };
 
+// The options every session command shares (--link, --test, --out, --emulate, ...;
+// commission.cpp).
+void add_session_options(CLI::App& cmd, SessionArgs& a);
+
 // Loads the test file (or the defaults), applies the emulated-plant settings, checks that a
 // link is named. Throws session::ConfigError (exit code 2).
 session::TestConfig load_config(const SessionArgs& args, const std::string& command);
+
+// Prepares --out, installs the SIGINT/SIGTERM handler, starts plantsim for --emulate, runs
+// body with the session options and stops plantsim; returns body's exit code.
+int with_session(const SessionArgs& args, const std::string& command,
+                 const std::function<int(const session::SessionOptions&)>& body);
 
 // Runs the session (starting and stopping plantsim for --emulate) and returns the exit code.
 int run_session(const SessionArgs& args, session::TestConfig config, const std::string& command);

@@ -12,7 +12,6 @@
 
 namespace rig::cli {
 
-void add_session_options(CLI::App& cmd, SessionArgs& a);  // commission.cpp
 
 namespace {
 struct SweepArgs {

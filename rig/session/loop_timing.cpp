@@ -64,7 +64,19 @@ double quantile_ms(std::vector<float> values, double q) {
 
 LoopTimer::LoopTimer(bool realtime, double period_s) : realtime_(realtime), period_s_(period_s) {}
 
+void LoopTimer::trim() {
+  if (window_ == 0 || t_s_.size() <= 2 * window_) return;
+  auto drop = [this](std::vector<float>& v) {
+    v.erase(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(std::min(window_, v.size())));
+  };
+  drop(t_s_);
+  drop(lateness_ms_);
+  drop(exchange_ms_);
+  dropped_ += window_;
+}
+
 void LoopTimer::start(double t_s, double lateness_s, bool overrun, bool slip) {
+  trim();
   t_s_.push_back(static_cast<float>(t_s));
   if (!realtime_) return;
   lateness_ms_.push_back(static_cast<float>(1e3 * std::max(0.0, lateness_s)));
@@ -83,7 +95,7 @@ LoopTimingSummary LoopTimer::summary() const {
   LoopTimingSummary s;
   s.mode = realtime_ ? "realtime" : "lockstep";
   s.period_ms = 1e3 * period_s_;
-  s.cycles = t_s_.size();
+  s.cycles = t_s_.size() + dropped_;
   s.exchange_p50_ms = quantile_ms(exchange_ms_, 0.5);
   s.exchange_p99_ms = quantile_ms(exchange_ms_, 0.99);
   s.exchange_max_ms = quantile_ms(exchange_ms_, 1.0);

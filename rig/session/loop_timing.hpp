@@ -51,6 +51,9 @@ class LoopTimer {
   // At the end of the read of the cycle most recently started.
   void exchange(double wall_s);
   void set_realtime_priority(bool fifo) { fifo_ = fifo; }
+  // A long run (rig monitor) keeps only the last `cycles` to 2 `cycles` cycles' timings, so
+  // that memory stays flat; the summary then describes those (cycles counts them all).
+  void set_window(std::size_t cycles) { window_ = cycles; }
 
   LoopTimingSummary summary() const;
 
@@ -58,6 +61,8 @@ class LoopTimer {
   bool realtime_;
   double period_s_;
   std::vector<float> t_s_, lateness_ms_, exchange_ms_;
+  std::size_t window_ = 0, dropped_ = 0;
+  void trim();
   std::size_t overruns_ = 0;
   std::size_t slips_ = 0;
   double slip_total_s_ = 0.0;

@@ -108,6 +108,8 @@ class SupervisedPhase : public SessionPhase {
   virtual bool prepare(RunContext& /*ctx*/) { return true; }  // false: skip, test goes on
   virtual std::optional<double> request(RunContext& ctx, long k) = 0;
   virtual void consume(RunContext& /*ctx*/, const TickResult& /*tick*/, long /*k*/) {}
+  // Every tick that consume() does not see (ramp-down, after a trip), sample or not.
+  virtual void observe(RunContext& /*ctx*/, const TickResult& /*tick*/) {}
   // After the ramp-down; completed is false after a trip. Returns whether the test goes on.
   virtual bool conclude(RunContext& /*ctx*/, bool completed) { return completed; }
   virtual double peak_to_rms() const { return 4.0; }

@@ -113,7 +113,11 @@ bool SupervisedPhase::run(RunContext& ctx) {
       }
     }
     const TickResult r = ctx.loop.supervised(sup, req);
-    if (r.sample && exciting && !sup.tripped()) consume(ctx, r, k);
+    if (r.sample && exciting && !sup.tripped()) {
+      consume(ctx, r, k);
+    } else {
+      observe(ctx, r);
+    }
     ++k;
     if (sup.tripped() && ctx.loop.link_gone()) break;  // nothing more can be written
   }

@@ -20,6 +20,8 @@ const char* to_string(Phase phase) {
       return "excite";
     case Phase::kSweep:
       return "sweep";
+    case Phase::kMonitor:
+      return "monitor";
   }
   return "?";
 }
@@ -166,7 +168,7 @@ TickResult TickLoop::prime() {
 
 TickResult TickLoop::supervised(Supervisor& sup, double request_pct) {
   pace();
-  if (abort_requested() && !sup.tripped()) {
+  if (abort_trips_ && abort_requested() && !sup.tripped()) {
     sup.trip(TripCause::kExternal, "operator abort (SIGINT)");
     event("abort", "operator abort: ramping the bias back to baseline");
   }
@@ -216,7 +218,7 @@ void TickLoop::record(const drivers::Sample& s, double u_pct, double request_pct
   // identify`; the trip they cause is in the events and the report.
   const bool finite =
       std::isfinite(s.power_kw) && std::isfinite(s.speed_rpm) && std::isfinite(s.freq_hz);
-  if (finite && rig_failure_.empty()) {
+  if (finite && rig_failure_.empty() && recording_) {
     try {
       recorder_.append({t_s(), u_pct, s.power_kw, s.speed_rpm, s.freq_hz,
                         static_cast<double>(s.status), static_cast<double>(phase_), request_pct,
@@ -226,13 +228,21 @@ void TickLoop::record(const drivers::Sample& s, double u_pct, double request_pct
       rig_failure_ = std::string("cannot write the recording: ") + e.what();
     }
   }
-  if (ticks_ % static_cast<std::uint64_t>(std::max(1.0, config_.link.sample_rate_hz / 10.0)) == 0 &&
+  if (tracing_ &&
+      ticks_ % static_cast<std::uint64_t>(std::max(1.0, config_.link.sample_rate_hz / 10.0)) == 0 &&
       finite) {
     trace_.t_s.push_back(t_s());
     trace_.deviation_pct.push_back(deviation_pct);
     trace_.u_pct.push_back(u_pct);
   }
   show();
+}
+
+void TickLoop::configure_long_run(bool keep_recording) {
+  recording_ = keep_recording;
+  tracing_ = false;
+  abort_trips_ = false;
+  timer_.set_window(static_cast<std::size_t>(3600.0 / dt_s_));
 }
 
 void TickLoop::show(bool force) { view_.update(status_, force); }

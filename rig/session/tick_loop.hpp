@@ -19,7 +19,7 @@
 namespace rig::session {
 
 // Phase codes of the recording's `phase` column.
-enum class Phase { kSteady = 0, kPilot = 1, kExcite = 2, kSweep = 3 };
+enum class Phase { kSteady = 0, kPilot = 1, kExcite = 2, kSweep = 3, kMonitor = 4 };
 const char* to_string(Phase phase);
 
 struct Event {
@@ -52,6 +52,11 @@ class TickLoop {
   TickResult prime();
   // A supervised tick: judge the latest sample, write the bias, advance, read, record.
   TickResult supervised(Supervisor& supervisor, double request_pct);
+
+  // A long run (rig monitor): no full-rate recording unless keep_recording, no trace, the
+  // last hour of cycle timings, and an operator abort ends the excitation through the phase
+  // (a normal end) instead of tripping the supervisor.
+  void configure_long_run(bool keep_recording);
 
   void set_phase(Phase phase);
   Phase phase() const { return phase_; }
@@ -108,6 +113,9 @@ class TickLoop {
   double max_dev_pct_ = 0.0;
   std::string last_link_error_;
   std::string rig_failure_;
+  bool recording_ = true;
+  bool tracing_ = true;
+  bool abort_trips_ = true;
 };
 
 }  // namespace rig::session
