@@ -82,11 +82,11 @@ Params load_toml(const std::filesystem::path& file) {
 }
 
 TimedChange parse_change(const std::string& text) {
+  constexpr const char* kSyntax = "NAME=VALUE@t=SECONDS[,ramp=SECONDS], e.g. injector_3=0@t=20";
   const auto eq = text.find('=');
   const auto at = text.find("@t=");
   if (eq == std::string::npos || at == std::string::npos || at < eq) {
-    throw ConfigError(
-        fmt::format("--fault '{}': expected NAME=VALUE@t=SECONDS, e.g. injector_3=0@t=20", text));
+    throw ConfigError(fmt::format("--fault '{}': expected {}", text, kSyntax));
   }
   const std::string name = text.substr(0, eq);
   const auto id = find_param(name);
@@ -95,17 +95,35 @@ TimedChange parse_change(const std::string& text) {
         "--fault '{}': unknown parameter '{}' (write block.name when a bare name is ambiguous)",
         text, name));
   }
+  const std::string_view view(text);
+  const auto comma = text.find(',', at);
+  const auto time_end = comma == std::string::npos ? text.size() : comma;
   bool ok_value = false;
   bool ok_time = false;
-  const double value = parse_number(std::string_view(text).substr(eq + 1, at - eq - 1), &ok_value);
-  const double time_s = parse_number(std::string_view(text).substr(at + 3), &ok_time);
+  const double value = parse_number(view.substr(eq + 1, at - eq - 1), &ok_value);
+  const double time_s = parse_number(view.substr(at + 3, time_end - at - 3), &ok_time);
   if (!ok_value) throw ConfigError(fmt::format("--fault '{}': VALUE is not a number", text));
   if (!ok_time || time_s < 0.0) {
     throw ConfigError(fmt::format("--fault '{}': SECONDS must be a number >= 0", text));
   }
+  double ramp_s = 0.0;
+  if (comma != std::string::npos) {
+    constexpr std::string_view kRamp = ",ramp=";
+    bool ok_ramp = view.substr(comma, kRamp.size()) == kRamp;
+    if (ok_ramp) ramp_s = parse_number(view.substr(comma + kRamp.size()), &ok_ramp);
+    if (!ok_ramp || !(ramp_s >= 0.0 && ramp_s <= 1e7)) {
+      throw ConfigError(fmt::format(
+          "--fault '{}': expected ',ramp=SECONDS' after the time, SECONDS a number 0 .. 1e7",
+          text));
+    }
+    if (ramp_s > 0.0 && !rampable(*id)) {
+      throw ConfigError(fmt::format("--fault '{}': {} takes abrupt changes only (no ramp)", text,
+                                    spec(*id).name));
+    }
+  }
   Params probe;  // range check with the same message as the TOML path
   probe.set(*id, value, fmt::format("--fault '{}'", text));
-  return TimedChange{*id, value, time_s, text};
+  return TimedChange{*id, value, time_s, ramp_s, text};
 }
 
 ResolvedConfig resolve(const PlantOptions& options) {

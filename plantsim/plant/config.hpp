@@ -1,6 +1,6 @@
 // Plant configuration: named presets, the plant TOML (--config) and timed parameter changes
-// (--fault NAME=VALUE@t=SECONDS). Every error is a ConfigError with one line naming the
-// file/key or fault string and what was expected.
+// (--fault NAME=VALUE@t=SECONDS[,ramp=SECONDS]). Every error is a ConfigError with one line naming
+// the file/key or fault string and what was expected.
 #pragma once
 
 #include <filesystem>
@@ -16,7 +16,8 @@ struct TimedChange {
   P param;
   double value = 0.0;
   double time_s = 0.0;
-  std::string text;  // as given, for messages
+  double ramp_s = 0.0;  // > 0: linear from the value at time_s to `value` at time_s + ramp_s
+  std::string text;     // as given, for messages
 };
 
 std::vector<std::string> preset_names();
@@ -28,7 +29,9 @@ Params load_toml(const std::filesystem::path& file);
 // The same from text; `origin` names the source in messages.
 Params parse_toml(const std::string& text, const std::string& origin);
 
-// "NAME=VALUE@t=SECONDS" (NAME dotted or a unique bare name, e.g. injector_3=0@t=20).
+// "NAME=VALUE@t=SECONDS" (NAME dotted or a unique bare name, e.g. injector_3=0@t=20), or
+// "NAME=VALUE@t=SECONDS,ramp=SECONDS": from the value at t linearly to VALUE over the ramp
+// time (ramp=0 is abrupt). Switches, engine.cylinders, alt.e_pu and solver.* take no ramp.
 TimedChange parse_change(const std::string& text);
 
 // Writes every parameter as plant TOML, one table per block, each line commented with its

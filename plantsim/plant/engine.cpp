@@ -1,6 +1,7 @@
 #include "plantsim/plant/engine.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <numbers>
 
@@ -64,7 +65,10 @@ double FuelDelayLine::at(double t_s) const {
 
 void FiringRipple::set_weights(const Params& p) {
   const int n = static_cast<int>(std::lround(p[P::kEngCylinders]));
-  const double sum = cylinder_factor(p) * n;
+  // Health with injectors_out folded in (a fractional value cuts part of one cylinder).
+  std::array<double, kMaxCylinders> health{};
+  double sum = 0.0;
+  for (int k = 0; k < n; ++k) sum += health[static_cast<std::size_t>(k)] = p.injector(k);
   enabled_ = p[P::kEngRipple] > 0.5 && sum > 0.0;
   cycle_rad_s_ = 2.0 * std::numbers::pi * p[P::kEngRpm] / 120.0;
   // Pulse width in cycle radians (720 crank degrees per cycle), Gaussian sigma = width / 2.
@@ -72,12 +76,16 @@ void FiringRipple::set_weights(const Params& p) {
   const int harmonics = 2 * n;
   weights_.assign(static_cast<std::size_t>(harmonics), {0.0, 0.0});
   if (!enabled_) return;
+  // Equal firing intervals phi_k = 2 pi k / n: e^{-j h phi_k} is the (h k mod n)-th root.
+  std::array<std::complex<double>, kMaxCylinders> roots{};
+  for (int m = 0; m < n; ++m) {
+    roots[static_cast<std::size_t>(m)] = std::polar(1.0, -2.0 * std::numbers::pi * m / n);
+  }
   for (int h = 1; h <= harmonics; ++h) {
     const double c_h = std::exp(-0.5 * (h * sigma_rad) * (h * sigma_rad));
     std::complex<double> s{0.0, 0.0};
     for (int k = 0; k < n; ++k) {
-      const double phi_k = 2.0 * std::numbers::pi * k / n;  // equal firing intervals
-      s += p.injector(k) * std::polar(1.0, -h * phi_k);
+      s += health[static_cast<std::size_t>(k)] * roots[static_cast<std::size_t>((h * k) % n)];
     }
     weights_[static_cast<std::size_t>(h - 1)] = 2.0 * c_h / sum * s;
   }

@@ -4,6 +4,8 @@
 //   f_d(t) = rack(t - Td),  Td = 30/N + 60/(n N)   (half a revolution + one firing interval)
 //   f_l    = min(f_d, F0 + Fb boost)                MAP limiter
 //   Tc m'  = c f_l - m,  c = sum(health_k) / n       mean torque (pu), injector health cuts it
+//                                                  (health_k: Params::injector, with
+//                                                  engine.injectors_out folded in)
 //   Tb b'  = c f_l - boost                           boost follows the delivered fuel
 #pragma once
 

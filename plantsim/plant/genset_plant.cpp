@@ -32,7 +32,8 @@ GensetPlant::GensetPlant(const Params& params, std::vector<TimedChange> changes,
       tick_(tick),
       dt_s_(std::chrono::duration<double>(tick).count()),
       chain_(seed, dt_s_),
-      changes_(std::move(changes)) {
+      changes_(std::move(changes)),
+      ripple_refresh_ticks_(std::max(1, static_cast<int>(std::lround(kRippleRefreshS / dt_s_)))) {
   if (!(dt_s_ > 0.0 && dt_s_ <= 0.1)) {
     throw ConfigError(fmt::format("tick: {} s, expected 0 < tick <= 0.1 s", dt_s_));
   }
@@ -53,6 +54,7 @@ GensetPlant::GensetPlant(const Params& params, std::vector<TimedChange> changes,
   actuator_pu_ = rack0;
   transducer_.reset(x0[GensetModel::kMeas]);
   model_.set_delay_line(delay_.get());
+  model_.set_ramps(&ramps_);
   model_.set_split_bias_path(linear_setpoint_path(params));
   x_ = x0;
   restart_solver(0.0);
@@ -66,7 +68,8 @@ GensetPlant::GensetPlant(const Params& params, std::vector<TimedChange> changes,
 void GensetPlant::restart_solver(double t_s, bool try_engine_path) {
   const EnginePath::State engine{x_[GensetModel::kEng + Engine::kTorque],
                                  x_[GensetModel::kEng + Engine::kBoost]};
-  const bool path = try_engine_path && EnginePath::usable(model_.params(), dt_s_) &&
+  const bool path = try_engine_path && !ramps_.touches_engine() &&
+                    EnginePath::usable(model_.params(), dt_s_) &&
                     engine_path_.anchor(model_.params(), t_s, engine, *delay_);
   model_.set_engine_path(path ? &engine_path_ : nullptr);
   ode_engine_ticks_ = 0;
@@ -76,6 +79,7 @@ void GensetPlant::restart_solver(double t_s, bool try_engine_path) {
 }
 
 void GensetPlant::sync_state() {
+  model_.apply_ramps(solver_->time());
   x_.head(solver_->state().size()) = solver_->state();
   if (model_.engine_path() == nullptr) return;
   const EnginePath::State e = engine_path_.at(solver_->time());
@@ -86,7 +90,10 @@ void GensetPlant::sync_state() {
 // With the engine in the ODE after a clamp acted, tries the closed form again now and then;
 // only a path that holds up to the newest corner restarts the solver.
 void GensetPlant::retry_engine_path() {
-  if (model_.engine_path() != nullptr || ++ode_engine_ticks_ < kEngineRetryTicks) return;
+  if (model_.engine_path() != nullptr || ramps_.touches_engine() ||
+      ++ode_engine_ticks_ < kEngineRetryTicks) {
+    return;
+  }
   ode_engine_ticks_ = 0;
   const EnginePath::State engine{x_[GensetModel::kEng + Engine::kTorque],
                                  x_[GensetModel::kEng + Engine::kBoost]};
@@ -97,9 +104,11 @@ void GensetPlant::retry_engine_path() {
 }
 
 // How far CVODE may step: to the end of the tick, or with look-ahead as far as the fuel is
-// known (t_now + Td), and with the engine in closed form no further than its newest knot.
+// known (t_now + Td; not while the dead time itself ramps), and with the engine in closed
+// form no further than its newest knot.
 double GensetPlant::horizon_s(double t_now, double t_end, bool look_ahead) const {
-  double h = look_ahead ? t_now + dead_time_s(model_.params()) : t_end;
+  const bool ahead = look_ahead && !ramps_.touches_dead_time();
+  double h = ahead ? t_now + dead_time_s(model_.params()) : t_end;
   if (model_.engine_path() != nullptr) h = std::min(h, engine_path_.valid_until_s());
   return std::max(h, t_end);
 }
@@ -115,15 +124,49 @@ double GensetPlant::engine_handback_s() const {
 
 void GensetPlant::reconfigure() {
   bias_path_.configure(model_.params(), dt_s_);
+  configure_ripple();
+}
+
+void GensetPlant::configure_ripple() {
   const Eigen::VectorXd& x = x_;
   ripple_.configure(model_.params(), [&](std::complex<double> s) {
     return model_.torque_to_measured_power(x.data(), s);
   });
 }
 
+// While ramps run, the quantities derived from their parameters follow them: the bias path
+// every tick, the firing ripple every kRippleRefreshS.
+void GensetPlant::refresh_ramped() {
+  if (ramps_.touches_bias_path()) bias_path_.configure(model_.params(), dt_s_);
+  if (ramps_.touches_ripple() && ++ripple_ticks_ >= ripple_refresh_ticks_) {
+    ripple_ticks_ = 0;
+    configure_ripple();
+  }
+}
+
 void GensetPlant::apply(const TimedChange& change) {
-  model_.mutable_params().set(change.param, change.value, "--fault '" + change.text + "'");
-  const bool split = linear_setpoint_path(model_.params());
+  const std::string where = "--fault '" + change.text + "'";
+  Params& p = model_.mutable_params();
+  if (change.ramp_s > 0.0) {
+    Params check = p;
+    check.set(change.param, change.value, where);
+    ramps_.start({change.param, change.time_s, change.time_s + change.ramp_s, p[change.param],
+                  change.value});
+  } else {
+    ramps_.cancel(change.param);
+    p.set(change.param, change.value, where);
+  }
+  parameters_changed();
+}
+
+void GensetPlant::finish_ramp() {
+  ramps_.finish_next(&model_.mutable_params());
+  parameters_changed();
+}
+
+void GensetPlant::parameters_changed() {
+  // A ramp of the deadband or rate limit keeps the setpoint path nonlinear while it runs.
+  const bool split = linear_setpoint_path(model_.params()) && !ramps_.touches_setpoint();
   if (model_.split_bias_path() && !split) {
     // Superposition undone: the ODE's governor states become the sums, the bias enters e.
     x_.segment<BiasPath::kStates>(GensetModel::kGov + Degov1::kZ1) += bias_path_.state();
@@ -131,8 +174,9 @@ void GensetPlant::apply(const TimedChange& change) {
   }
   model_.set_split_bias_path(split);
   reconfigure();
-  // A parameter step makes the right-hand side discontinuous (and may change the active
-  // states or the tolerances): restart CVODE from the state at the change.
+  // A parameter step or the start or end of a ramp makes the right-hand side (or its slope)
+  // discontinuous, and may change the active states or the tolerances: restart CVODE from
+  // the state at the change.
   restart_solver(solver_->time());
 }
 
@@ -172,15 +216,19 @@ bool GensetPlant::advance_solver(double t_now, double t_end) {
     for (;;) {
       const bool change = next_change_ < changes_.size();
       const double t_change = change ? std::max(changes_[next_change_].time_s, t_now) : kNever;
+      const double t_ramp = std::max(ramps_.next_end_s(), t_now);
       const double t_handback = engine_handback_s();
-      const double t_event = std::min(t_change, t_handback);
+      const double t_param = std::min(t_change, t_ramp);
+      const double t_event = std::min(t_param, t_handback);
       if (t_event > t_end) break;
       solver_->advance_to(t_event, horizon_s(t_now, t_event, look_ahead));
       sync_state();
       advance_bias_path(t_event - t_seg);
       t_seg = t_event;
-      if (t_handback <= t_change) {
+      if (t_handback <= t_param) {
         restart_solver(t_event, false);
+      } else if (t_ramp <= t_change) {
+        finish_ramp();  // before a change at the same time, which then wins
       } else {
         apply(changes_[next_change_++]);
       }
@@ -206,6 +254,7 @@ void GensetPlant::step() {
     return;
   }
   ++ticks_;
+  if (!ramps_.empty()) refresh_ramped();
   const Eigen::VectorXd& x = x_;
   const Params& p = model_.params();
   const double xf_ode = Degov1::actuator_pu(x.data() + GensetModel::kGov);

@@ -1,7 +1,7 @@
 // The generator-set plant behind the Plant interface: the GensetModel ODE integrated by CVODE
 // tick by tick, the fuel history buffer, the engine lags in closed form while no clamp acts
 // (EnginePath), rack backlash, firing ripple and the measurement chain, with timed parameter
-// changes applied exactly at their plant time.
+// changes applied exactly at their plant time, abruptly or as linear ramps (RampSet).
 #pragma once
 
 #include <memory>
@@ -14,6 +14,7 @@
 #include "plantsim/plant/measurement_chain.hpp"
 #include "plantsim/plant/model.hpp"
 #include "plantsim/plant/plant.hpp"
+#include "plantsim/plant/ramps.hpp"
 
 namespace plantsim {
 
@@ -44,7 +45,11 @@ class GensetPlant : public Plant {
 
  private:
   void apply(const TimedChange& change);
+  void finish_ramp();
+  void parameters_changed();
   void reconfigure();
+  void configure_ripple();
+  void refresh_ramped();
   void update_measurement();
   void advance_bias_path(double duration_s);
   void sync_state();
@@ -74,6 +79,12 @@ class GensetPlant : public Plant {
   MeasurementChain chain_;
   std::vector<TimedChange> changes_;
   std::size_t next_change_ = 0;
+  RampSet ramps_;
+  // While a ramp moves the ripple's weights or gains they are refreshed every 10 ms of plant
+  // time (a twentieth of stornoway's firing cycle; ramps last seconds to hours).
+  static constexpr double kRippleRefreshS = 0.01;
+  int ripple_refresh_ticks_ = 1;
+  int ripple_ticks_ = 0;
   std::uint64_t ticks_ = 0;
   // Ticks without a bias change before CVODE may step beyond the next tick.
   static constexpr int kLookAheadAfterTicks = 20;

@@ -6,7 +6,7 @@
 namespace plantsim {
 
 double MeasurementChain::sample_kw(const Params& p, double t_s, double p_pu, double ripple_pu) {
-  double y = p[P::kMeasGain] * (p_pu + ripple_pu) * p[P::kRatedKw];
+  double y = p[P::kMeasGain] * (p_pu + ripple_pu) * p[P::kRatedKw] + p[P::kMeasOffset];
   // Both draws happen every tick whatever the amplitudes, so a fault that switches noise on
   // does not shift the random sequence of the other source.
   const double n_white = normal_(rng_);

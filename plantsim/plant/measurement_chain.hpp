@@ -1,6 +1,6 @@
 // Measurement chain of the electrical power (DESIGN.md section 7). The transducer lag
 // Tt p' = Pe - p is a state of the ODE; everything after it acts per tick on the sample:
-//   y = gain (p + ripple) P_rated + drift + noise + A sin(2 pi f_pick t)     (kW)
+//   y = gain (p + ripple) P_rated + offset + drift + noise + A sin(2 pi f_pick t)     (kW)
 //   quantised to q kW, then optionally AC-coupled by the analogue RC high-pass s RC/(1 + s RC).
 // Drift is an Ornstein-Uhlenbeck process d_k = a d_{k-1} + sqrt(1 - a^2) sigma n_k,
 // a = exp(-dt/tau). All randomness comes from one seeded generator: same seed, same samples.

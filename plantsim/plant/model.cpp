@@ -53,6 +53,7 @@ void GensetModel::set_frozen(const Eigen::VectorXd& full) {
 }
 
 bool GensetModel::derivatives(double t, const double* x, double* dx) {
+  apply_ramps(t);
   full_x_.head(active_) = Eigen::Map<const Eigen::VectorXd>(x, active_);
   const double bias_pu = split_ ? 0.0 : bias_pu_;
   if (engine_path_ != nullptr) {

@@ -14,6 +14,7 @@
 #include "plantsim/plant/engine.hpp"
 #include "plantsim/plant/engine_path.hpp"
 #include "plantsim/plant/governor.hpp"
+#include "plantsim/plant/ramps.hpp"
 #include "plantsim/solver/cvode_solver.hpp"
 
 namespace plantsim {
@@ -60,6 +61,12 @@ class GensetModel : public OdeSystem {
   // from it and its engine states are constant placeholders. nullptr: the ODE integrates them.
   void set_engine_path(const EnginePath* path) { engine_path_ = path; }
   const EnginePath* engine_path() const { return engine_path_; }
+  // Running ramps: every right-hand-side evaluation sets the ramped parameters to their value
+  // at its time; apply_ramps(t) does the same between solver calls.
+  void set_ramps(const RampSet* ramps) { ramps_ = ramps; }
+  void apply_ramps(double t_s) {
+    if (ramps_ != nullptr && !ramps_->empty()) ramps_->apply(&p_, t_s);
+  }
 
   double electrical_power_pu(const double* x) const { return alt_.electrical_power_pu(x + kAlt); }
   double terminal_voltage_pu(const double* x) const { return alt_.terminal_voltage_pu(x + kAlt); }
@@ -77,6 +84,7 @@ class GensetModel : public OdeSystem {
   bool split_ = false;
   const FuelDelayLine* delay_ = nullptr;
   const EnginePath* engine_path_ = nullptr;
+  const RampSet* ramps_ = nullptr;
   int active_ = kSize;
   Eigen::VectorXd full_x_ = Eigen::VectorXd::Zero(kSize);
   Eigen::VectorXd full_dx_ = Eigen::VectorXd::Zero(kSize);

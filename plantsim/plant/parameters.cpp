@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cmath>
 
 #include "plantsim/plant/plant.hpp"
@@ -18,6 +19,12 @@ const std::array<ParamSpec, kParamCount>& param_specs() {
 }
 
 const ParamSpec& spec(P id) { return param_specs()[static_cast<std::size_t>(id)]; }
+
+bool rampable(P id) {
+  const ParamSpec& s = spec(id);
+  return s.unit != "bool" && id != P::kEngCylinders && id != P::kAltE &&
+         s.name.substr(0, 7) != "solver.";
+}
 
 std::optional<P> find_param(std::string_view name) {
   const auto& specs = param_specs();
@@ -51,10 +58,11 @@ void Params::set(P id, double value, const std::string& where) {
 }
 
 double Params::injector(int cylinder_index) const {
-  // Cylinders 1..injectors_out are cut completely; the others keep their own health.
-  if (cylinder_index < static_cast<int>(std::lround((*this)[P::kEngInjectorsOut]))) return 0.0;
+  // Cylinders 1..floor(injectors_out) are cut completely, the next one by the fraction left;
+  // the others keep their own health.
+  const double cut = std::clamp((*this)[P::kEngInjectorsOut] - cylinder_index, 0.0, 1.0);
   const auto base = static_cast<std::size_t>(P::kInjector1);
-  return v_[base + static_cast<std::size_t>(cylinder_index)];
+  return (1.0 - cut) * v_[base + static_cast<std::size_t>(cylinder_index)];
 }
 
 }  // namespace plantsim

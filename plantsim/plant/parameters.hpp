@@ -1,6 +1,7 @@
 // Every plant parameter in one table (DESIGN.md section 7): name, unit, default, valid range.
 // Names are "<block>.<name>"; the plant TOML uses one table per block ([gov] r_pu = 0.05) and
-// --fault uses the dotted name (or the bare name when it is unique): "engine.injector_3=0@t=20".
+// --fault uses the dotted name (or the bare name when it is unique): "engine.injector_3=0@t=20",
+// optionally ramped: "engine.injectors_out=2@t=600,ramp=1800".
 // Defaults are a generic 4.6 MW, 600 rpm set; presets override some of them (presets.hpp).
 #pragma once
 
@@ -18,7 +19,7 @@ namespace plantsim {
 // clang-format off
 #define PLANTSIM_PARAMETERS \
   X(kRatedKw, "op.rated_kw", "kW", 4600.0, 10.0, 1e6, "rated electrical power (per-unit base)") \
-  X(kPowerKw, "op.power_kw", "kW", 3500.0, 0.0, 1e6, "initial electrical power (operating point)") \
+  X(kPowerKw, "op.power_kw", "kW", 3500.0, 0.0, 1e6, "operating point; a later change moves the governor's load reference") \
   X(kFreqHz, "op.freq_hz", "Hz", 50.0, 40.0, 70.0, "nominal bus frequency") \
   X(kRatedVoltageV, "op.rated_voltage_v", "V", 11000.0, 100.0, 1e6, "rated terminal voltage") \
   X(kGridConnected, "op.grid_connected", "bool", 1.0, 0.0, 1.0, "1 grid, 0 islanded load") \
@@ -45,7 +46,7 @@ namespace plantsim {
   X(kEngBoostLag, "engine.boost_lag_s", "s", 2.0, 0.05, 60.0, "turbocharger boost lag") \
   X(kEngMapMin, "engine.map_fuel_min_pu", "pu", 0.4, 0.0, 2.0, "fuel limit at zero boost") \
   X(kEngMapGain, "engine.map_fuel_gain", "pu/pu", 0.9, 0.0, 10.0, "fuel limit per pu of boost") \
-  X(kEngInjectorsOut, "engine.injectors_out", "1", 0.0, 0.0, 20.0, "cylinders 1..n without fuel") \
+  X(kEngInjectorsOut, "engine.injectors_out", "1", 0.0, 0.0, 20.0, "cylinders 1..n without fuel (fractional n: the next loses that fraction)") \
   X(kEngPulseWidth, "engine.pulse_width_deg", "deg", 30.0, 1.0, 720.0, "torque pulse width (crank)") \
   X(kEngRipple, "engine.ripple", "bool", 1.0, 0.0, 1.0, "firing ripple in the output") \
   PLANTSIM_INJECTOR(1) \
@@ -84,6 +85,7 @@ namespace plantsim {
   X(kLoadPu, "load.step_pu", "pu", 0.0, -1.0, 1.0, "island load change from the operating point") \
   X(kMeasLag, "meas.transducer_lag_s", "s", 0.003, 0.0001, 10.0, "power transducer lag") \
   X(kMeasGain, "meas.gain", "1", 1.0, 0.0, 10.0, "transducer gain (1 = no error)") \
+  X(kMeasOffset, "meas.offset_kw", "kW", 0.0, -1e5, 1e5, "transducer offset added to the measured power") \
   X(kMeasNoise, "meas.noise_kw", "kW", 0.0, 0.0, 1e5, "white noise rms") \
   X(kMeasPickup, "meas.pickup_kw", "kW", 0.0, 0.0, 1e5, "mains pick-up amplitude") \
   X(kMeasPickupHz, "meas.pickup_hz", "Hz", 50.0, 1.0, 1000.0, "mains pick-up frequency") \
@@ -116,6 +118,9 @@ struct ParamSpec {
 
 const std::array<ParamSpec, kParamCount>& param_specs();
 const ParamSpec& spec(P id);
+// False for parameters that take abrupt changes only: switches (unit "bool"), the cylinder
+// count, the initial internal voltage alt.e_pu (read at start only) and solver settings.
+bool rampable(P id);
 // Exact dotted name, or a bare name that matches exactly one "<block>.<name>".
 std::optional<P> find_param(std::string_view name);
 
@@ -125,11 +130,30 @@ class Params {
   double operator[](P id) const { return v_[static_cast<std::size_t>(id)]; }
   // Throws ConfigError naming `where` (file/key or fault string) when out of range.
   void set(P id, double value, const std::string& where);
-  double injector(int cylinder_index) const;  // 0-based; folds in injectors_out
+  // Without the range check: for values between two checked ones (a running ramp).
+  void set_unchecked(P id, double value) { v_[static_cast<std::size_t>(id)] = value; }
+  // Health of a cylinder (0-based index k) with injectors_out folded in: cylinder k loses the
+  // fraction clamp(injectors_out - k, 0, 1) of its fuel, so injectors_out = 1.5 cuts cylinder
+  // 1 and half of cylinder 2.
+  double injector(int cylinder_index) const;
   bool operator==(const Params&) const = default;
 
  private:
   std::array<double, kParamCount> v_{};
+};
+
+// A parameter moving linearly from `from` at t0_s to `to` at t1_s (t1_s > t0_s).
+struct ParamRamp {
+  P param;
+  double t0_s = 0.0;
+  double t1_s = 0.0;
+  double from = 0.0;
+  double to = 0.0;
+  double at(double t_s) const {
+    if (t_s <= t0_s) return from;
+    if (t_s >= t1_s) return to;
+    return from + (to - from) * (t_s - t0_s) / (t1_s - t0_s);
+  }
 };
 
 }  // namespace plantsim

@@ -22,15 +22,15 @@ struct ConfigError : std::runtime_error {
 };
 
 struct Measurement {
-  double time_s = 0.0;            // plant time
-  double power_w = 0.0;           // measured electrical power (after the measurement chain)
+  double time_s = 0.0;   // plant time
+  double power_w = 0.0;  // measured electrical power (after the measurement chain)
   double speed_rpm = 0.0;
   double freq_hz = 0.0;           // bus frequency
   double voltage_v = 0.0;         // terminal voltage
   double bias_applied_pct = 0.0;  // bias the governor is applying, % of rated power
   bool running = true;
   bool breaker_closed = true;
-  bool fault = false;             // solver failure or a plant-side fault state
+  bool fault = false;  // solver failure or a plant-side fault state
 };
 
 class Plant {
@@ -51,9 +51,9 @@ class Plant {
 };
 
 struct PlantOptions {
-  std::string preset = "stornoway";                 // ignored when `config` is set
-  std::optional<std::filesystem::path> config;      // plant TOML
-  std::vector<std::string> faults;                  // "NAME=VALUE@t=SECONDS"
+  std::string preset = "stornoway";             // ignored when `config` is set
+  std::optional<std::filesystem::path> config;  // plant TOML
+  std::vector<std::string> faults;              // "NAME=VALUE@t=SECONDS[,ramp=SECONDS]"
   std::uint64_t seed = 1;
   std::chrono::nanoseconds tick = std::chrono::milliseconds(1);
 };

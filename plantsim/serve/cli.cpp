@@ -45,7 +45,8 @@ void add_options(CLI::App& app, ServeOptions& o, TextOptions& t) {
                  "'command' to answer each accepted command (lockstep: one per 0xFF52)")
       ->default_str("command");
   app.add_option("--fault", o.plant.faults,
-                 "Parameter change NAME=VALUE@t=SECONDS (plant time, repeatable); interface "
+                 "Parameter change NAME=VALUE@t=SECONDS[,ramp=SECONDS] (plant time, repeatable; "
+                 "a ramp moves linearly from the value at t to VALUE); interface "
                  "faults serve.freeze_counter, serve.nan_power, serve.drop_link =1 (on) or 0 "
                  "(off), e.g. serve.nan_power=1@t=30");
   app.add_option("--seed", o.plant.seed, "Seed of the plant's noise")->default_str("1");

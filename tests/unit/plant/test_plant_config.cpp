@@ -99,6 +99,47 @@ TEST(PlantConfig, MalformedFaultStringsAreRejected) {
   EXPECT_TRUE(contains(error_of([] { parse_change("d_pu=5@t=1"); }), "ambiguous"));
 }
 
+TEST(PlantConfig, RampedFaultStringsParse) {
+  const TimedChange c = parse_change("engine.injectors_out=2@t=600,ramp=1800");
+  EXPECT_EQ(c.param, P::kEngInjectorsOut);
+  EXPECT_EQ(c.value, 2.0);
+  EXPECT_EQ(c.time_s, 600.0);
+  EXPECT_EQ(c.ramp_s, 1800.0);
+  EXPECT_EQ(parse_change("op.power_kw=3800@t=600").ramp_s, 0.0);  // abrupt
+  EXPECT_EQ(parse_change("op.power_kw=3800@t=600,ramp=0").ramp_s, 0.0);
+  EXPECT_EQ(parse_change("meas.offset_kw=-12.5@t=3,ramp=0.5").value, -12.5);
+  EXPECT_EQ(parse_change("op.grid_connected=0@t=3,ramp=0").ramp_s, 0.0);  // abrupt is fine
+}
+
+TEST(PlantConfig, MalformedRampsAreRejectedWithTheFaultString) {
+  for (const char* bad : {"op.power_kw=3800@t=600,ramp=", "op.power_kw=3800@t=600,ramp=-5",
+                          "op.power_kw=3800@t=600,rmp=5", "op.power_kw=3800@t=600,ramp=5s",
+                          "op.power_kw=3800@t=600,"}) {
+    const auto msg = error_of([&] { parse_change(bad); });
+    EXPECT_TRUE(contains(msg, std::string("'") + bad + "'")) << msg;
+    EXPECT_TRUE(contains(msg, "expected ',ramp=SECONDS'")) << msg;
+  }
+  const auto msg = error_of([] { parse_change("op.grid_connected=0@t=3,ramp=5"); });
+  EXPECT_TRUE(contains(msg, "op.grid_connected takes abrupt changes only")) << msg;
+  EXPECT_TRUE(contains(error_of([] { parse_change("engine.cylinders=6@t=3,ramp=5"); }),
+                       "abrupt changes only"));
+  EXPECT_TRUE(contains(error_of([] { parse_change("op.power_kw=3800@t=x,ramp=5"); }), "SECONDS"));
+  EXPECT_TRUE(contains(error_of([] { parse_change("meas.offset_kw=2e5@t=1,ramp=5"); }),
+                       "expected -100000 .. 100000 kW"));
+}
+
+TEST(PlantConfig, FractionalInjectorsOutCutsPartOfOneCylinder) {
+  Params p;
+  p.set(P::kEngInjectorsOut, 1.25, "test");
+  p.set(P::kInjector2, 0.8, "test");
+  EXPECT_EQ(p.injector(0), 0.0);                // cylinder 1 cut
+  EXPECT_DOUBLE_EQ(p.injector(1), 0.75 * 0.8);  // cylinder 2 loses a quarter of its own fuel
+  EXPECT_EQ(p.injector(2), 1.0);
+  p.set(P::kEngInjectorsOut, 2.0, "test");
+  EXPECT_EQ(p.injector(1), 0.0);
+  EXPECT_EQ(p.injector(2), 1.0);
+}
+
 TEST(PlantConfig, ResolveSortsChangesByTime) {
   PlantOptions o;
   o.faults = {"alt.d_pu=5@t=3", "injector_1=0@t=1"};
