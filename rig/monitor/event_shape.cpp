@@ -50,6 +50,7 @@ const char* to_string(ShapeKind kind) {
     case ShapeKind::kSensorStep: return "sensor step";
     case ShapeKind::kPowerLossRecovered: return "power loss recovered";
     case ShapeKind::kLevelChange: return "level change";
+    case ShapeKind::kSlowDrift: return "slow drift";
     case ShapeKind::kUnclear: break;
   }
   return "unclear";
@@ -87,6 +88,19 @@ EventShape classify_shape(const std::vector<double>& x, double dt_s, long from, 
     e.kind = ShapeKind::kLevelChange;
   }
   return e;
+}
+
+std::vector<double> cycle_average(const std::vector<double>& x, long n) {
+  if (n <= 1 || x.empty()) return x;
+  const long len = static_cast<long>(x.size());
+  std::vector<double> prefix(x.size() + 1, 0.0);
+  for (long i = 0; i < len; ++i) prefix[i + 1] = prefix[i] + x[static_cast<std::size_t>(i)];
+  std::vector<double> y(x.size());
+  for (long i = 0; i < len; ++i) {
+    const long a = std::max(0L, i - n / 2), b = std::min(len, a + n);
+    y[static_cast<std::size_t>(i)] = (prefix[b] - prefix[a]) / static_cast<double>(b - a);
+  }
+  return y;
 }
 
 }  // namespace rig::monitor

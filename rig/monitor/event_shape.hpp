@@ -27,7 +27,7 @@
 
 namespace rig::monitor {
 
-enum class ShapeKind { kUnclear, kSensorStep, kPowerLossRecovered, kLevelChange };
+enum class ShapeKind { kUnclear, kSensorStep, kPowerLossRecovered, kLevelChange, kSlowDrift };
 const char* to_string(ShapeKind kind);
 
 struct EventShape {
@@ -48,7 +48,8 @@ struct ShapeThresholds {
   double final_from_s = 15.0;   // after the recovery
   double final_to_s = 30.0;
   double step_share = 0.6;      // a step has most of its change in the first 0.1 s
-  double overshoot = 1.6;       // and no transient beyond its final value
+  double overshoot = 1.3;       // and no transient beyond its final value (a load step
+                                // through the governor overshoots by half its size and more)
   double recovered_share = 0.35;  // a recovered loss ends near the old level
   double min_change_sigmas = 6.0;  // a change must stand out of the pre-onset noise
   double min_change_kw = 0.0;      // and exceed this (set from P0)
@@ -59,5 +60,9 @@ struct ShapeThresholds {
 // must extend pre_s before `from` and final_to_s after `to`; otherwise kUnclear.
 EventShape classify_shape(const std::vector<double>& x, double dt_s, long from, long to,
                           const ShapeThresholds& th = {});
+
+// Moving average over n samples (centred; the ends average what exists). Over one engine
+// cycle it removes the engine-order lines and all their harmonics.
+std::vector<double> cycle_average(const std::vector<double>& x, long n);
 
 }  // namespace rig::monitor

@@ -30,9 +30,11 @@ Monitor::Monitor(const model::TransferFunction& baseline, const MonitorSettings&
   stats_.push_back(Statistic{"residual"});
   stats_.push_back(Statistic{"line"});
   const double block_s = static_cast<double>(s.block_samples) * s.dt_s;
-  design_ = design_cusum(s.false_alarms_per_month, block_s, static_cast<int>(stats_.size()),
-                         s.cusum_k);
+  // One more test: the level.
+  design_ = design_cusum(s.false_alarms_per_month, block_s,
+                         static_cast<int>(stats_.size()) + 1, s.cusum_k);
   for (auto& st : stats_) st.cusum = Cusum(design_);
+  level_.cusum = Cusum(design_);
   u_hist_ = Eigen::VectorXd::Zero(s.warmup_samples + s.block_samples);
   y_blk_ = Eigen::VectorXd::Zero(s.block_samples);
   const auto p = static_cast<Eigen::Index>(names_.size());
@@ -69,6 +71,7 @@ std::optional<BlockReport> Monitor::push(double t_s, double u_pct, double y_kw, 
   if (speed > 0.0 && std::isfinite(speed)) {
     speed_sum_ += speed;
     ++speed_n_;
+    speed_rpm_ = speed;
   }
   if (++in_block_ < s_.block_samples) return std::nullopt;
   BlockReport report;
@@ -128,9 +131,10 @@ void Monitor::end_block(double t_s, BlockReport& report) {
   if (!learnt_ || recentre_left_ > 0) {
     learn(f, x, t_s);
   } else {
-    watch(x, f, t_s, report);
+    watch(x, f, t_s);
   }
   tracked_values(f, report);
+  level_drift(x, t_s);
 }
 
 void Monitor::learn(const BlockFit& f, const std::vector<double>& x, double t_s) {
@@ -182,6 +186,8 @@ void Monitor::finish_learning(double t_s, bool spreads) {
     st.recent_z.clear();
   }
   if (spreads) {
+    level_.spread = learn_spread(level_.learn);
+    level_.learn.clear();
     learnt_ = true;
     sec_sigma_ = learn_spread(sec_learn_).raw_sigma;
     sec_learn_.clear();
@@ -199,11 +205,11 @@ std::string Monitor::learnt_text() const {
   for (const auto& st : stats_) {
     text += fmt::format("; {} sigma {:.3g} (rho {:.2f})", st.name, st.spread.sigma, st.spread.rho);
   }
+  text += fmt::format("; level sigma {:.3g} kW (rho {:.2f})", level_.spread.sigma, level_.spread.rho);
   return text;
 }
 
-void Monitor::watch(const std::vector<double>& x, const BlockFit& f, double t_s,
-                    BlockReport& report) {
+void Monitor::watch(const std::vector<double>& x, const BlockFit& f, double t_s) {
   std::string fired;
   int onset_blocks = 1;
   for (std::size_t j = 0; j < stats_.size(); ++j) {
@@ -222,7 +228,7 @@ void Monitor::watch(const std::vector<double>& x, const BlockFit& f, double t_s,
   if (recent_explained_.size() > kRecentBlocks) recent_explained_.pop_front();
   if (decide_in_ > 0) {
     deferred_.reset();
-    if (--decide_in_ == 0) alarm(t_s, s_.decision_blocks, "the level event's evidence", report);
+    if (--decide_in_ == 0) alarm(t_s, s_.decision_blocks, "the level event's evidence");
     return;
   }
   // A crossing is confirmed one block later: a level step that has just happened shows in the
@@ -230,7 +236,7 @@ void Monitor::watch(const std::vector<double>& x, const BlockFit& f, double t_s,
   if (deferred_) {
     const auto [trigger, blocks] = *deferred_;
     deferred_.reset();
-    alarm(t_s, blocks + 1, trigger, report);
+    alarm(t_s, blocks + 1, trigger);
   } else if (!fired.empty()) {
     deferred_ = std::make_pair("the CUSUM of " + fired, onset_blocks);
   }

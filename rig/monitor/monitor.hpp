@@ -52,6 +52,9 @@ struct MonitorSettings {
   double event_post_s = 30.0;     // and seen after it before its shape is judged
   double level_sigmas = 8.0;      // 1 s mean beyond this many sigmas of its recent range
   double min_level_pct = 0.5;     // and beyond this % of P0: a level event
+  // A level drift found by the level CUSUM is a load change when a load event or re-baseline
+  // happened within this time (the governor's setpoint cannot be read), else a sensor drift.
+  double load_event_memory_s = 1800.0;
   double p0_kw = 0.0;
 };
 
@@ -65,7 +68,6 @@ struct BlockReport {
   double t_s = 0.0;
   bool learning = false;
   std::vector<SeriesValue> values;
-  std::vector<AlarmRecord> alarms;
 };
 
 class Monitor {
@@ -86,8 +88,9 @@ class Monitor {
   // A new segment at P0: couplers and the current block restart; learnt spreads are kept.
   void resume(double p0_kw);
 
-  // Events since the last call (for the history and the live view).
+  // Events and alarms since the last call (for the history, stdout and the live view).
   std::vector<MonitorEvent> take_events();
+  std::vector<AlarmRecord> take_alarms();
   const std::vector<std::string>& parameter_names() const { return names_; }
   bool learning() const { return !learnt_; }
   double p0_kw() const { return s_.p0_kw; }
@@ -117,8 +120,10 @@ class Monitor {
   void learn(const BlockFit& f, const std::vector<double>& x, double t_s);
   void finish_learning(double t_s, bool spreads);
   std::string learnt_text() const;
-  void watch(const std::vector<double>& x, const BlockFit& f, double t_s, BlockReport& report);
-  void alarm(double t_s, int onset_blocks, const std::string& trigger, BlockReport& report);
+  void watch(const std::vector<double>& x, const BlockFit& f, double t_s);
+  void alarm(double t_s, int onset_blocks, const std::string& trigger);
+  void level_drift(const std::vector<double>& x, double t_s);
+  double event_line_z(const std::vector<double>& record) const;
   Evidence evidence(int blocks) const;
   void level_check(double t_s, double y_kw);
   void judge_event(double t_s);
@@ -174,6 +179,14 @@ class Monitor {
   std::set<std::string> latched_;
   long alarm_count_ = 0;
   std::vector<MonitorEvent> events_;
+  std::vector<AlarmRecord> alarms_;
+  // The measured level against the last baseline (block means), for slow drifts.
+  Statistic level_{"level"};
+  double level_ref_kw_ = 0.0;
+  double last_load_event_s_ = -1e30;  // a load change or re-baseline
+  double speed_rpm_ = 0.0;            // latest, for the engine cycle
+  double block_level_kw_ = 0.0;       // mean raw power of the latest block
+  double event_line_z_ = 0.0;         // the line in the latest event's record
 };
 
 }  // namespace rig::monitor

@@ -96,12 +96,18 @@ void Monitor::forget_recent_block() {
 void Monitor::judge_event(double t_s) {
   const Pending p = *pending_;
   pending_.reset();
-  const std::vector<double> x = event_record();
-  const long base = sample_ - static_cast<long>(x.size());
+  const std::vector<double> raw = event_record();
+  const long base = sample_ - static_cast<long>(raw.size());
   const long det = p.detect_sample - base;
   auto n = [this](double s) { return std::lround(s / s_.dt_s); };
   ShapeThresholds th;
   th.min_change_kw = 0.5 * s_.min_level_pct / 100.0 * s_.p0_kw;
+  // One engine cycle (two revolutions) averaged out: a missing cylinder's ripple would
+  // otherwise dominate every feature; the jump then needs the cycle to show.
+  const double cycle_s = speed_rpm_ > 0.0 ? 120.0 / speed_rpm_ : 0.0;
+  const std::vector<double> x = cycle_average(raw, n(cycle_s));
+  th.jump_s += cycle_s;
+  event_line_z_ = event_line_z(raw);
   // A trip follows its onset within seconds; a level event is recognised kLevelHits + 1 s
   // after it at most.
   const EventShape e =
@@ -117,6 +123,7 @@ void Monitor::judge_event(double t_s) {
                                                  "and stayed: a load change, " + sizes});
       rebaseline_ = true;
       load_changed_ = true;
+      last_load_event_s_ = onset_t;
       break;
     case ShapeKind::kSensorStep:
     case ShapeKind::kPowerLossRecovered: {
@@ -127,8 +134,14 @@ void Monitor::judge_event(double t_s) {
       rebaseline_ = rebaseline_ || e.kind == ShapeKind::kSensorStep;
       events_.push_back({onset_t, e.kind == ShapeKind::kSensorStep ? "sensor step" : "power loss",
                          std::string(to_string(e.kind)) + ": " + sizes});
+      // A recovered power loss with the half-order line is named at once: no block of
+      // excitation is needed (nor possible while the ripple keeps the power out of band).
+      if (learnt_ && e.kind == ShapeKind::kPowerLossRecovered && event_line_z_ >= kSignificantZ) {
+        alarm(t_s, 1, "the event's shape and the engine-order line");
+      }
       break;
     }
+    case ShapeKind::kSlowDrift:  // not a shape of an event record
     case ShapeKind::kUnclear:
       events_.push_back({onset_t, "unclear event", "no clear shape: " + sizes});
       break;
@@ -140,6 +153,8 @@ void Monitor::resume(double p0_kw) {
   s_.p0_kw = p0_kw;
   restart_block();
   rebaseline_ = false;
+  level_ref_kw_ = p0_kw;
+  level_.cusum.reset();
   sec_means_.clear();
   sec_sum_ = 0.0;
   sec_n_ = 0;
@@ -148,6 +163,12 @@ void Monitor::resume(double p0_kw) {
     recentre_left_ = s_.recentre_blocks;  // thresholds conditioned on the new operating point
   }
   load_changed_ = false;
+}
+
+std::vector<AlarmRecord> Monitor::take_alarms() {
+  std::vector<AlarmRecord> out;
+  out.swap(alarms_);
+  return out;
 }
 
 std::vector<MonitorEvent> Monitor::take_events() {
@@ -184,6 +205,7 @@ Evidence Monitor::evidence(int blocks) const {
   for (std::size_t i = 0; i < names_.size(); ++i) ev.deviation[names_[i]] = tracked_display_[i];
   ev.shape = shape_;
   ev.level_ratio = shape_level_ratio_;
+  if (shape_) ev.z_line = std::max(ev.z_line, event_line_z_);
   return ev;
 }
 
@@ -206,7 +228,7 @@ std::string evidence_json(const Evidence& ev, const Diagnosis& d, const std::str
   return j.dump();
 }
 
-void Monitor::alarm(double t_s, int blocks, const std::string& trigger, BlockReport& report) {
+void Monitor::alarm(double t_s, int blocks, const std::string& trigger) {
   const Evidence ev = evidence(blocks);
   Diagnosis d = diagnose(ev);
   if (d.cause.empty()) {
@@ -224,7 +246,7 @@ void Monitor::alarm(double t_s, int blocks, const std::string& trigger, BlockRep
     a.onset_s = t_s - blocks * block_s;
     a.check = d.check;
     a.evidence_json = evidence_json(ev, d, trigger);
-    report.alarms.push_back(a);
+    alarms_.push_back(a);
     latched_.insert(d.cause);
     ++alarm_count_;
   } else {
@@ -236,6 +258,7 @@ void Monitor::alarm(double t_s, int blocks, const std::string& trigger, BlockRep
   shape_level_ratio_ = 0.0;
   decide_in_ = -1;
   for (auto& st : stats_) st.cusum.reset();
+  level_.cusum.reset();
 }
 
 void Monitor::tracked_values(const BlockFit& f, BlockReport& report) {
@@ -271,8 +294,48 @@ void Monitor::tracked_values(const BlockFit& f, BlockReport& report) {
   const std::size_t n = std::min<std::size_t>(x.size(), static_cast<std::size_t>(s_.block_samples));
   double level = 0.0;
   for (std::size_t i = x.size() - n; i < x.size(); ++i) level += x[i];
-  report.values.push_back({"level_kw", n > 0 ? level / static_cast<double>(n) : 0.0,
-                           std::nullopt, std::nullopt});
+  block_level_kw_ = n > 0 ? level / static_cast<double>(n) : 0.0;
+  report.values.push_back({"level_kw", block_level_kw_, std::nullopt, std::nullopt});
+}
+
+double Monitor::event_line_z(const std::vector<double>& record) const {
+  const Statistic& line = stats_.back();
+  const auto n = static_cast<std::size_t>(s_.block_samples);
+  if (!learnt_ || speed_rpm_ <= 0.0 || record.size() < n || !(line.spread.sigma > 0.0)) {
+    return 0.0;
+  }
+  const Eigen::Map<const Eigen::VectorXd> tail(record.data() + record.size() - n,
+                                               static_cast<Eigen::Index>(n));
+  const double r = line_log_ratio(tail, s_.dt_s, speed_rpm_ / 120.0);
+  return std::isfinite(r) ? (r - line.spread.mean) / line.spread.sigma : 0.0;
+}
+
+// The level CUSUM on block means against the baseline's level: a drift with no load event
+// in memory is a sensor's (named with the transfer function's evidence); with one, the load's.
+void Monitor::level_drift(const std::vector<double>& /*x*/, double t_s) {
+  const double dev = block_level_kw_ - level_ref_kw_;
+  if (!learnt_) {
+    level_.learn.push_back(dev);
+    return;
+  }
+  if (recentre_left_ > 0 || decide_in_ > 0 || pending_ || rebaseline_) return;
+  const double z = (dev - level_.spread.mean) / level_.spread.sigma;
+  if (!std::isfinite(z) || level_.cusum.update(z) == 0) return;
+  if (t_s - last_load_event_s_ < s_.load_event_memory_s) {
+    events_.push_back({t_s, "load change", fmt::format("the level drifted by {:+.1f} kW after a "
+                                                       "load change: a slow load move", dev)});
+    last_load_event_s_ = t_s;
+  } else {
+    EventShape e;
+    e.kind = ShapeKind::kSlowDrift;
+    e.final_kw = dev;
+    shape_ = e;
+    shape_level_ratio_ = level_ref_kw_ > 0.0 ? dev / level_ref_kw_ : 0.0;
+    events_.push_back({t_s, "drift", fmt::format("the measured level drifted by {:+.1f} kW with "
+                                                 "no load event", dev)});
+    alarm(t_s, std::max(1, level_.cusum.run_length()), "the level CUSUM");
+  }
+  rebaseline_ = true;
 }
 
 }  // namespace rig::monitor

@@ -13,6 +13,10 @@ double z_of(const Evidence& e, const std::string& name) {
 // Evidence strength: 0 below significance, then growing slowly (a huge z is not more causes).
 double strength(double z) { return z < kSignificantZ ? 0.0 : 1.0 + std::log(z / kSignificantZ); }
 bool shape_is(const Evidence& e, ShapeKind k) { return e.shape && e.shape->kind == k; }
+// The measured level moved without the plant's dynamics: a step or a slow drift.
+bool sensor_move(const Evidence& e) {
+  return shape_is(e, ShapeKind::kSensorStep) || shape_is(e, ShapeKind::kSlowDrift);
+}
 // Largest |z| among the tracked parameters other than `except`.
 double others_max(const Evidence& e, const std::string& except) {
   double m = 0.0;
@@ -23,7 +27,7 @@ double others_max(const Evidence& e, const std::string& except) {
 }
 
 double injector_score(const Evidence& e) {
-  if (shape_is(e, ShapeKind::kSensorStep)) return 0.0;
+  if (sensor_move(e)) return 0.0;
   const double line = strength(e.z_line);
   const double gain_down = strength(-z_of(e, "gain"));
   const double dip = shape_is(e, ShapeKind::kPowerLossRecovered) ? 1.5 : 0.0;
@@ -37,8 +41,8 @@ double transducer_gain_score(const Evidence& e) {
   if (shape_is(e, ShapeKind::kPowerLossRecovered)) return 0.0;
   double s = strength(std::abs(zg));
   if (e.isolated == "gain") s += 0.5;
-  if (shape_is(e, ShapeKind::kSensorStep)) {
-    // The level step must agree in sign with the gain's move.
+  if (sensor_move(e)) {
+    // The level's move must agree in sign with the gain's move.
     s += (e.level_ratio > 0.0) == (zg > 0.0) ? 1.5 : -1.0;
   }
   // A gain loss with added lag is the actuator's signature, not the transducer's.
@@ -47,7 +51,7 @@ double transducer_gain_score(const Evidence& e) {
 }
 
 double transducer_offset_score(const Evidence& e) {
-  if (!shape_is(e, ShapeKind::kSensorStep)) return 0.0;
+  if (!sensor_move(e)) return 0.0;
   const double moved = std::max(std::abs(z_of(e, "gain")), others_max(e, "gain"));
   return moved < kSignificantZ ? 2.5 : 0.5;
 }

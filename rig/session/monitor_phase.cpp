@@ -82,15 +82,15 @@ class MonitorPhase final : public SupervisedPhase {
 void MonitorRun::publish(RunContext& ctx, const monitor::BlockReport* report) {
   if (report != nullptr) {
     history.add_values(run_id, report->t_s, report->values);
-    for (const auto& a : report->alarms) {
+    show_values(ctx, *report, summary.alarms);
+  }
+  for (const auto& a : core.take_alarms()) {
       history.add_alarm(run_id, a);
       ++summary.alarms;
       print_alarm(options.alarms_out, a);
       ctx.loop.event("alarm", fmt::format("{} ({}, confidence {:.2f}): check {}", a.cause,
                                           a.fault_class, a.confidence, a.check));
       ctx.view.message(fmt::format("ALARM at {:.0f} s: {} ({})", a.t_s, a.cause, a.fault_class));
-    }
-    show_values(ctx, *report, summary.alarms);
   }
   for (const auto& e : core.take_events()) {
     history.add_event(run_id, e.t_s, e.kind, e.text);

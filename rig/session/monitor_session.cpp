@@ -55,6 +55,8 @@ std::optional<double> wait_for_steady(RunContext& ctx, MonitorRun& run) {
   const long window = std::lround(kSettleWindowS * c.link.sample_rate_hz);
   const long limit = std::lround(run.options.settle_timeout_s * c.link.sample_rate_hz);
   std::deque<double> t, p;
+  std::deque<double> cycle;  // the last engine cycle of power, averaged: no firing ripple
+  double cycle_sum = 0.0;
   for (long k = 0; k < limit; ++k) {
     if (ctx.loop.abort_requested()) {
       run.stop_reason = "stopped by the operator while waiting for a steady state";
@@ -71,8 +73,17 @@ std::optional<double> wait_for_steady(RunContext& ctx, MonitorRun& run) {
     }
     run.core.observe(r.t_s, 0.0, r.sample->power_kw);
     run.publish(ctx, nullptr);
+    const double speed = r.sample->speed_rpm > 0.0 ? r.sample->speed_rpm : 0.0;
+    const auto cycle_n = static_cast<std::size_t>(
+        std::max(1L, speed > 0.0 ? std::lround(120.0 / speed * c.link.sample_rate_hz) : 1L));
+    cycle.push_back(r.sample->power_kw);
+    cycle_sum += r.sample->power_kw;
+    while (cycle.size() > cycle_n) {
+      cycle_sum -= cycle.front();
+      cycle.pop_front();
+    }
     t.push_back(r.t_s);
-    p.push_back(r.sample->power_kw);
+    p.push_back(cycle_sum / static_cast<double>(cycle.size()));
     if (static_cast<long>(t.size()) > window) {
       t.pop_front();
       p.pop_front();

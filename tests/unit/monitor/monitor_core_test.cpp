@@ -36,9 +36,8 @@ RunResult run(const SyntheticSet& set, const SyntheticChange& change, double dur
   RunResult out;
   for (std::size_t k = 0; k < rec.t_s.size(); ++k) {
     if (m.wants_rebaseline()) m.resume(rec.y_kw[k]);
-    if (auto r = m.push(rec.t_s[k], rec.u_pct[k], rec.y_kw[k], set.speed_rpm)) {
-      for (auto& a : r->alarms) out.alarms.push_back(a);
-    }
+    m.push(rec.t_s[k], rec.u_pct[k], rec.y_kw[k], set.speed_rpm);
+    for (auto& a : m.take_alarms()) out.alarms.push_back(a);
     for (auto& e : m.take_events()) out.events.push_back(e);
   }
   return out;
