@@ -25,6 +25,8 @@
 //   events(run_id INTEGER, t_s REAL, history_s REAL, utc TEXT, kind TEXT, text TEXT)
 //   alarms(run_id INTEGER, t_s REAL, history_s REAL, utc TEXT, cause TEXT, fault_class TEXT,
 //          confidence REAL, onset_s REAL, check_text TEXT, evidence TEXT)  -- evidence: JSON
+//   index series(name, history_s); the file is marked by PRAGMA application_id 0x52494748
+//   ("RIGH") and PRAGMA user_version 1 (the schema version)
 // Errors (cannot open, not a monitor history, disk full) throw HistoryError with one line
 // naming the file and what failed.
 #pragma once
@@ -98,6 +100,13 @@ struct HistoryAlarm {
   AlarmRecord alarm;
 };
 
+// Counts and extremes of one whole series (not decimated), for the report's summary.
+struct SeriesSummary {
+  std::size_t count = 0;
+  double first_history_s = 0.0, last_history_s = 0.0;
+  std::optional<double> min, max;  // none when every value is NaN
+};
+
 class History {
  public:
   static constexpr int kCommitPeriod = 200;
@@ -122,6 +131,7 @@ class History {
   // Points of one series in history order; at most max_points, evenly decimated (keeping the
   // first and last) so that months of history draw quickly.
   std::vector<HistoryPoint> series(const std::string& name, std::size_t max_points = 20000) const;
+  SeriesSummary series_summary(const std::string& name) const;
   std::vector<HistoryEvent> events() const;
   std::vector<HistoryAlarm> alarms() const;
   const std::filesystem::path& file() const;
