@@ -265,6 +265,17 @@ void History::end_run(long run, int exit_code, const std::string& outcome) {
   m.commit();
 }
 
+void History::set_run_p0(long run, double p0_kw) {
+  Impl& m = *impl_;
+  m.offset_of(run, 0.0);
+  m.begin();
+  const StmtPtr s = m.prepare("UPDATE runs SET p0_kw = ? WHERE id = ?");
+  bind(s.get(), 1, p0_kw);
+  bind(s.get(), 2, run);
+  m.step_write(s.get(), "cannot record the run's P0");
+  m.commit();
+}
+
 void History::flush() {
   if (!impl_->read_only) impl_->commit();
 }

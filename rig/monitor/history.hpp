@@ -123,6 +123,8 @@ class History {
   void add_event(long run, double t_s, const std::string& kind, const std::string& text);
   void add_alarm(long run, const AlarmRecord& alarm);
   void end_run(long run, int exit_code, const std::string& outcome);
+  // The run's first steady-state P0, once measured (a run starts before it is known).
+  void set_run_p0(long run, double p0_kw);
   void flush();  // commits pending rows
 
   // Reading (for the report and tests).

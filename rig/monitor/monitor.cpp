@@ -201,7 +201,7 @@ std::string Monitor::learnt_text() const {
   std::string text = fmt::format(
       "baseline spread learnt over {} blocks; CUSUM k {:.2f} h {:.2f}: designed {:.2g} false "
       "alarms per month over {} statistics",
-      learn_blocks_, design_.k, design_.h, design_.false_alarms_per_month, stats_.size());
+      learn_blocks_, design_.k, design_.h, design_.false_alarms_per_month, stats_.size() + 1);
   for (const auto& st : stats_) {
     text += fmt::format("; {} sigma {:.3g} (rho {:.2f})", st.name, st.spread.sigma, st.spread.rho);
   }

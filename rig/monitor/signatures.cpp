@@ -63,10 +63,12 @@ double damping_score(const Evidence& e) {
          (z >= others_max(e, "damping") ? 0.5 : 0.0);
 }
 
+// A longer dead time is a pure phase lag: the delay dominates, and the fit stays linear.
 double delay_score(const Evidence& e) {
   const double z = z_of(e, "delay");
-  if (strength(z) == 0.0 || z_of(e, "gain") <= -kSignificantZ) return 0.0;
-  return strength(z) + (e.isolated == "delay" ? 1.0 : 0.0);
+  if (strength(z) == 0.0) return 0.0;
+  return strength(z) + (e.isolated == "delay" ? 1.0 : 0.0) +
+         (z >= others_max(e, "delay") ? 1.0 : 0.0);
 }
 
 // A line near significance also raises the residual: no nonlinearity is read from it then.
@@ -74,10 +76,13 @@ constexpr double kLineQuietZ = 2.0;
 
 double backlash_score(const Evidence& e) {
   if (e.z_line >= kLineQuietZ || e.shape) return 0.0;
+  // Play in the rack: small-signal gain lost (the describing function of backlash), a phase
+  // lag, and a response no linear model explains (the residual grows).
   const double loss = strength(-z_of(e, "gain"));
   const double lag = strength(z_of(e, "delay"));
   const double nonlinear = strength(e.z_residual);
-  if (loss == 0.0 || (lag == 0.0 && nonlinear == 0.0)) return 0.0;
+  const bool gain_leads = -z_of(e, "gain") >= others_max(e, "gain");
+  if (loss == 0.0 || (nonlinear == 0.0 && !gain_leads)) return 0.0;
   return loss + lag + nonlinear;
 }
 

@@ -161,6 +161,7 @@ std::unique_ptr<io::RecordingWriter> open_recorder(const TestConfig& c,
 // Steady state, activation, the excitation plan, then the monitoring loop.
 void monitor_run(RunContext& ctx, MonitorRun& run, const model::TransferFunction& pairs_model) {
   if (!make_steady_state_phase()->run(ctx)) return;
+  run.history.set_run_p0(run.run_id, ctx.p0_kw);
   run.history.add_event(run.run_id, ctx.loop.t_s(), "start",
                         fmt::format("steady state P0 {:.1f} kW", ctx.p0_kw));
   if (!make_activate_phase()->run(ctx)) return;
