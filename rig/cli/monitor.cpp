@@ -66,9 +66,9 @@ int run_monitor_command(MonitorArgs& a) {
   session::TestConfig config = load_config(a.session, "monitor");
   if (a.trip_band_pct > 0.0) config.safety.band_pct = a.trip_band_pct;
   if (a.options.band_pct > config.safety.band_pct) {
-    throw session::ConfigError(fmt::format(
-        "--band-pct {:g}: the monitoring band must lie inside the trip band ({:g} %)",
-        a.options.band_pct, config.safety.band_pct));
+    throw session::ConfigError(
+        fmt::format("--band-pct {:g}: the monitoring band must lie inside the trip band ({:g} %)",
+                    a.options.band_pct, config.safety.band_pct));
   }
   session::validate(config);
   const session::MonitorOptions o = monitor_options(a);

@@ -12,7 +12,6 @@
 
 namespace rig::cli {
 
-
 namespace {
 struct SweepArgs {
   SessionArgs session;

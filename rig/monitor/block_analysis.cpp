@@ -49,8 +49,8 @@ BlockFit analyse_block(const std::vector<model::TransferFunction>& models,
   const Eigen::VectorXd y0 = model::simulate(models[0], u_c, dt_s).tail(n);
   Eigen::MatrixXd s(n, p);
   for (Eigen::Index i = 0; i < p; ++i) {
-    s.col(i) = (model::simulate(models[static_cast<std::size_t>(i + 1)], u_c, dt_s).tail(n) -
-                y0) / probes[static_cast<std::size_t>(i)];
+    s.col(i) = (model::simulate(models[static_cast<std::size_t>(i + 1)], u_c, dt_s).tail(n) - y0) /
+               probes[static_cast<std::size_t>(i)];
   }
   const Eigen::VectorXd r = y_c - y0;
   const double rr = r.squaredNorm();

@@ -25,16 +25,16 @@ namespace rig::monitor {
 
 struct BlockFit {
   int parameters = 0;
-  Eigen::VectorXd joint;     // d, joint fit (deviation in the registry's raw units)
-  Eigen::VectorXd joint_se;  // white-noise standard errors of d
-  Eigen::VectorXd single;    // d_i, single-parameter fits
-  Eigen::VectorXd explained;  // residual energy share each single fit removes (0..1)
-  Eigen::MatrixXd normal;    // S'S (for exponentially forgotten tracking)
-  Eigen::VectorXd rhs;       // S'r
-  double residual_rms_kw = 0.0;   // of r
-  double response_rms_kw = 0.0;   // of G0 u_c
+  Eigen::VectorXd joint;             // d, joint fit (deviation in the registry's raw units)
+  Eigen::VectorXd joint_se;          // white-noise standard errors of d
+  Eigen::VectorXd single;            // d_i, single-parameter fits
+  Eigen::VectorXd explained;         // residual energy share each single fit removes (0..1)
+  Eigen::MatrixXd normal;            // S'S (for exponentially forgotten tracking)
+  Eigen::VectorXd rhs;               // S'r
+  double residual_rms_kw = 0.0;      // of r
+  double response_rms_kw = 0.0;      // of G0 u_c
   double fit_residual_rms_kw = 0.0;  // of r after the joint fit
-  double line_log_ratio = 0.0;    // log10 line power / neighbourhood power (NaN: no speed)
+  double line_log_ratio = 0.0;       // log10 line power / neighbourhood power (NaN: no speed)
   double line_hz = 0.0;
 };
 

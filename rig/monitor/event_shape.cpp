@@ -47,11 +47,16 @@ long find_onset(const std::vector<double>& x, long from, long to, long w) {
 
 const char* to_string(ShapeKind kind) {
   switch (kind) {
-    case ShapeKind::kSensorStep: return "sensor step";
-    case ShapeKind::kPowerLossRecovered: return "power loss recovered";
-    case ShapeKind::kLevelChange: return "level change";
-    case ShapeKind::kSlowDrift: return "slow drift";
-    case ShapeKind::kUnclear: break;
+    case ShapeKind::kSensorStep:
+      return "sensor step";
+    case ShapeKind::kPowerLossRecovered:
+      return "power loss recovered";
+    case ShapeKind::kLevelChange:
+      return "level change";
+    case ShapeKind::kSlowDrift:
+      return "slow drift";
+    case ShapeKind::kUnclear:
+      break;
   }
   return "unclear";
 }
@@ -76,8 +81,8 @@ EventShape classify_shape(const std::vector<double>& x, double dt_s, long from, 
     const double m = mean(x, i, i + a) - pre;
     if (std::abs(m) > std::abs(e.extreme_kw)) e.extreme_kw = m;
   }
-  const double min_change = std::max(th.min_change_kw, th.min_change_sigmas * e.noise_kw /
-                                                           std::sqrt(static_cast<double>(w)));
+  const double min_change = std::max(
+      th.min_change_kw, th.min_change_sigmas * e.noise_kw / std::sqrt(static_cast<double>(w)));
   const double fin = std::abs(e.final_kw), ext = std::abs(e.extreme_kw);
   if (fin >= min_change && std::abs(e.jump_kw) >= th.step_share * fin &&
       ext <= th.overshoot * fin) {

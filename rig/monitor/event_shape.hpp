@@ -32,25 +32,25 @@ const char* to_string(ShapeKind kind);
 
 struct EventShape {
   ShapeKind kind = ShapeKind::kUnclear;
-  long onset = 0;         // sample index of the change in the given record
-  double jump_kw = 0.0;   // see above
+  long onset = 0;        // sample index of the change in the given record
+  double jump_kw = 0.0;  // see above
   double extreme_kw = 0.0;
   double final_kw = 0.0;
   double noise_kw = 0.0;  // std of the pre-onset samples
 };
 
 struct ShapeThresholds {
-  double pre_s = 10.0;          // pre-onset level
-  double jump_s = 0.1;          // a transducer settles in ms; the engine needs > 0.1 s
-  double local_pre_s = 0.5;     // the level the jump is measured from
-  double extreme_s = 8.0;       // the governor's recovery lasts seconds
-  double extreme_avg_s = 0.2;   // smooths noise out of the extreme
-  double final_from_s = 15.0;   // after the recovery
+  double pre_s = 10.0;         // pre-onset level
+  double jump_s = 0.1;         // a transducer settles in ms; the engine needs > 0.1 s
+  double local_pre_s = 0.5;    // the level the jump is measured from
+  double extreme_s = 8.0;      // the governor's recovery lasts seconds
+  double extreme_avg_s = 0.2;  // smooths noise out of the extreme
+  double final_from_s = 15.0;  // after the recovery
   double final_to_s = 30.0;
-  double step_share = 0.6;      // a step has most of its change in the first 0.1 s
-  double overshoot = 1.3;       // and no transient beyond its final value (a load step
-                                // through the governor overshoots by half its size and more)
-  double recovered_share = 0.35;  // a recovered loss ends near the old level
+  double step_share = 0.6;         // a step has most of its change in the first 0.1 s
+  double overshoot = 1.3;          // and no transient beyond its final value (a load step
+                                   // through the governor overshoots by half its size and more)
+  double recovered_share = 0.35;   // a recovered loss ends near the old level
   double min_change_sigmas = 6.0;  // a change must stand out of the pre-onset noise
   double min_change_kw = 0.0;      // and exceed this (set from P0)
 };

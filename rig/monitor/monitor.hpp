@@ -19,6 +19,7 @@
 // few blocks of standardised values.
 #pragma once
 
+#include <cmath>
 #include <deque>
 #include <map>
 #include <optional>
@@ -30,6 +31,7 @@
 #include "rig/monitor/block_analysis.hpp"
 #include "rig/monitor/event_shape.hpp"
 #include "rig/monitor/history.hpp"
+#include "rig/monitor/sensor_test.hpp"
 #include "rig/monitor/sequential_test.hpp"
 #include "rig/monitor/signatures.hpp"
 #include "rig/monitor/tracked_parameters.hpp"
@@ -39,19 +41,19 @@ namespace rig::monitor {
 
 struct MonitorSettings {
   double dt_s = 0.01;
-  long block_samples = 2048;      // 20.48 s at 100 Hz: one value of every statistic
-  long warmup_samples = 1024;     // the model's simulation settles on these before a block
-  double coupling_rc_s = 1.6;     // matched AC coupling of excitation and response
-  double learn_s = 600.0;         // baseline spread from this much excitation
+  long block_samples = 2048;            // 20.48 s at 100 Hz: one value of every statistic
+  long warmup_samples = 1024;           // the model's simulation settles on these before a block
+  double coupling_rc_s = 1.6;           // matched AC coupling of excitation and response
+  double learn_s = 600.0;               // baseline spread from this much excitation
   double false_alarms_per_month = 0.5;  // designed, all statistics together
-  double cusum_k = 0.75;          // fastest detection for a 1.5 sigma shift
-  int decision_blocks = 6;        // evidence gathered after an event before naming it
-  int recentre_blocks = 10;       // after an alarm, the means follow the new state
-  double tracking_forgetting = 0.8;  // per block, for the tracked-parameter trends
-  double event_pre_s = 60.0;      // raw power kept before a level event / trip
-  double event_post_s = 30.0;     // and seen after it before its shape is judged
-  double level_sigmas = 8.0;      // 1 s mean beyond this many sigmas of its recent range
-  double min_level_pct = 0.5;     // and beyond this % of P0: a level event
+  double cusum_k = 0.75;                // fastest detection for a 1.5 sigma shift
+  int decision_blocks = 6;              // evidence gathered after an event before naming it
+  int recentre_blocks = 10;             // after an alarm, the means follow the new state
+  double tracking_forgetting = 0.8;     // per block, for the tracked-parameter trends
+  double event_pre_s = 60.0;            // raw power kept before a level event / trip
+  double event_post_s = 30.0;           // and seen after it before its shape is judged
+  double level_sigmas = 8.0;            // 1 s mean beyond this many sigmas of its recent range
+  double min_level_pct = 0.5;           // and beyond this % of P0: a level event
   // A level drift found by the level CUSUM is a load change when a load event or re-baseline
   // happened within this time (the governor's setpoint cannot be read), else a sensor drift.
   double load_event_memory_s = 1800.0;
@@ -123,6 +125,7 @@ class Monitor {
   void watch(const std::vector<double>& x, const BlockFit& f, double t_s);
   void alarm(double t_s, int onset_blocks, const std::string& trigger);
   void level_drift(const std::vector<double>& x, double t_s);
+  void sensor_block(const BlockFit& f, double t_s);
   double event_line_z(const std::vector<double>& record) const;
   Evidence evidence(int blocks) const;
   void level_check(double t_s, double y_kw);
@@ -153,8 +156,8 @@ class Monitor {
   int learn_blocks_ = 0, recentre_left_ = 0;
   Eigen::MatrixXd track_a_;
   Eigen::VectorXd track_b_;
-  std::vector<double> mean_dev_;  // learnt mean of each joint deviation (raw units)
-  std::vector<double> dev_sum_, dev_weight_;   // its weighted mean while learning
+  std::vector<double> mean_dev_;              // learnt mean of each joint deviation (raw units)
+  std::vector<double> dev_sum_, dev_weight_;  // its weighted mean while learning
   std::vector<std::vector<double>> raw_dev_, raw_se_;
   std::deque<Eigen::VectorXd> recent_explained_;
   std::optional<BlockFit> last_fit_;
@@ -163,7 +166,7 @@ class Monitor {
   // Events.
   std::vector<double> ring_;    // raw power, circular
   std::vector<double> ring_u_;  // applied excitation of the same samples
-  long sample_ = 0;           // global sample index (samples pushed or observed)
+  long sample_ = 0;             // global sample index (samples pushed or observed)
   double sec_sum_ = 0.0;
   long sec_n_ = 0;
   std::deque<double> sec_means_;
@@ -173,7 +176,9 @@ class Monitor {
   std::optional<Pending> pending_;
   std::optional<EventShape> shape_;  // the latest fault-shaped event, as evidence
   double shape_level_ratio_ = 0.0;
-  int decide_in_ = -1;  // blocks until an event's evidence is named
+  int decide_in_ = -1;                // blocks until an event's evidence is named
+  std::optional<SensorTest> sensor_;  // a measured level moved: gain error or offset?
+  double sensor_z_gain_ = NAN, sensor_z_offset_ = NAN;
   std::optional<std::pair<std::string, int>> deferred_;  // a crossing awaiting confirmation
   bool rebaseline_ = false;
   std::set<std::string> latched_;

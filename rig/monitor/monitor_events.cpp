@@ -61,7 +61,8 @@ void Monitor::level_check(double t_s, double y_kw) {
     if (!learnt_) {
       sec_learn_.push_back(dev);
     } else {
-      const double thr = std::max(s_.level_sigmas * sec_sigma_, s_.min_level_pct / 100.0 * s_.p0_kw);
+      const double thr =
+          std::max(s_.level_sigmas * sec_sigma_, s_.min_level_pct / 100.0 * s_.p0_kw);
       level_hits_ = std::abs(dev) > thr ? level_hits_ + 1 : 0;
       if (level_hits_ >= kLevelHits) {
         pending_ = Pending{sample_, t_s, false};
@@ -119,8 +120,10 @@ void Monitor::judge_event(double t_s) {
   rebaseline_ = p.trip;
   switch (e.kind) {
     case ShapeKind::kLevelChange:
-      events_.push_back({onset_t, "load change", "the level moved through the plant's dynamics "
-                                                 "and stayed: a load change, " + sizes});
+      events_.push_back({onset_t, "load change",
+                         "the level moved through the plant's dynamics "
+                         "and stayed: a load change, " +
+                             sizes});
       rebaseline_ = true;
       load_changed_ = true;
       last_load_event_s_ = onset_t;
@@ -130,7 +133,11 @@ void Monitor::judge_event(double t_s) {
       shape_ = e;
       const double before = s_.p0_kw;
       shape_level_ratio_ = before > 0.0 ? e.final_kw / before : 0.0;
-      decide_in_ = s_.decision_blocks;
+      if (e.kind == ShapeKind::kSensorStep) {
+        sensor_.emplace(before, s_.decision_blocks);  // the level before the step
+      } else {
+        decide_in_ = s_.decision_blocks;
+      }
       rebaseline_ = rebaseline_ || e.kind == ShapeKind::kSensorStep;
       events_.push_back({onset_t, e.kind == ShapeKind::kSensorStep ? "sensor step" : "power loss",
                          std::string(to_string(e.kind)) + ": " + sizes});
@@ -205,6 +212,8 @@ Evidence Monitor::evidence(int blocks) const {
   for (std::size_t i = 0; i < names_.size(); ++i) ev.deviation[names_[i]] = tracked_display_[i];
   ev.shape = shape_;
   ev.level_ratio = shape_level_ratio_;
+  ev.sensor_z_gain = sensor_z_gain_;
+  ev.sensor_z_offset = sensor_z_offset_;
   if (shape_) ev.z_line = std::max(ev.z_line, event_line_z_);
   return ev;
 }
@@ -257,6 +266,8 @@ void Monitor::alarm(double t_s, int blocks, const std::string& trigger) {
   shape_.reset();
   shape_level_ratio_ = 0.0;
   decide_in_ = -1;
+  sensor_.reset();
+  sensor_z_gain_ = sensor_z_offset_ = NAN;
   for (auto& st : stats_) st.cusum.reset();
   level_.cusum.reset();
 }
@@ -298,6 +309,25 @@ void Monitor::tracked_values(const BlockFit& f, BlockReport& report) {
   report.values.push_back({"level_kw", block_level_kw_, std::nullopt, std::nullopt});
 }
 
+// The sensor test's block: the gain's joint deviation against the learnt mean, its standard
+// error calibrated by the learnt spread, and the block's level.
+void Monitor::sensor_block(const BlockFit& f, double t_s) {
+  if (!sensor_ || names_.empty() || names_[0] != "gain") return;
+  const double c = std::isfinite(stats_[0].spread.sigma) ? stats_[0].spread.sigma : 1.0;
+  sensor_->add(block_level_kw_, f.joint(0) - mean_dev_[0], c * f.joint_se(0));
+  if (!sensor_->decided()) return;
+  sensor_z_gain_ = sensor_->z_gain();
+  sensor_z_offset_ = sensor_->z_offset();
+  events_.push_back({t_s, "sensor test",
+                     fmt::format("level moved {:+.2f} %, gain {:+.2f} % over {} blocks: "
+                                 "P(gain error) {:.2f}",
+                                 100.0 * sensor_->ratio(), 100.0 * sensor_->gain(),
+                                 sensor_->blocks(), sensor_->p_gain())});
+  const int blocks = sensor_->blocks();
+  alarm(t_s, blocks, "the sensor test");
+  rebaseline_ = true;  // the level moved: a new P0 for the band
+}
+
 double Monitor::event_line_z(const std::vector<double>& record) const {
   const Statistic& line = stats_.back();
   const auto n = static_cast<std::size_t>(s_.block_samples);
@@ -318,12 +348,14 @@ void Monitor::level_drift(const std::vector<double>& /*x*/, double t_s) {
     level_.learn.push_back(dev);
     return;
   }
-  if (recentre_left_ > 0 || decide_in_ > 0 || pending_ || rebaseline_) return;
+  if (recentre_left_ > 0 || decide_in_ > 0 || sensor_ || pending_ || rebaseline_) return;
   const double z = (dev - level_.spread.mean) / level_.spread.sigma;
   if (!std::isfinite(z) || level_.cusum.update(z) == 0) return;
   if (t_s - last_load_event_s_ < s_.load_event_memory_s) {
-    events_.push_back({t_s, "load change", fmt::format("the level drifted by {:+.1f} kW after a "
-                                                       "load change: a slow load move", dev)});
+    events_.push_back({t_s, "load change",
+                       fmt::format("the level drifted by {:+.1f} kW after a "
+                                   "load change: a slow load move",
+                                   dev)});
     last_load_event_s_ = t_s;
   } else {
     EventShape e;
@@ -331,9 +363,13 @@ void Monitor::level_drift(const std::vector<double>& /*x*/, double t_s) {
     e.final_kw = dev;
     shape_ = e;
     shape_level_ratio_ = level_ref_kw_ > 0.0 ? dev / level_ref_kw_ : 0.0;
-    events_.push_back({t_s, "drift", fmt::format("the measured level drifted by {:+.1f} kW with "
-                                                 "no load event", dev)});
-    alarm(t_s, std::max(1, level_.cusum.run_length()), "the level CUSUM");
+    events_.push_back({t_s, "drift",
+                       fmt::format("the measured level drifted by {:+.1f} kW with "
+                                   "no load event",
+                                   dev)});
+    // Named by the sensor test once the transfer function's gain tells gain from offset.
+    sensor_.emplace(level_ref_kw_, s_.decision_blocks);
+    return;
   }
   rebaseline_ = true;
 }

@@ -33,9 +33,9 @@ struct Spread {
 Spread learn_spread(const std::vector<double>& values);
 
 struct CusumDesign {
-  double k = 0.75;               // reference value (half the shift of fastest detection), sigma
-  double h = 10.0;               // decision threshold, sigma
-  double arl0_blocks = 0.0;      // in-control run length of one two-sided CUSUM, blocks
+  double k = 0.75;           // reference value (half the shift of fastest detection), sigma
+  double h = 10.0;           // decision threshold, sigma
+  double arl0_blocks = 0.0;  // in-control run length of one two-sided CUSUM, blocks
   double false_alarms_per_month = 0.0;  // of all tests together, as designed
 };
 
@@ -49,7 +49,10 @@ class Cusum {
   explicit Cusum(const CusumDesign& d = {}) : d_(d) {}
   // Returns +1 or -1 when the upper or lower sum crosses h (then both restart), 0 otherwise.
   int update(double z);
-  void reset() { up_ = down_ = 0.0; run_ = 0; }
+  void reset() {
+    up_ = down_ = 0.0;
+    run_ = 0;
+  }
   double upper() const { return up_; }
   double lower() const { return down_; }
   double level() const { return up_ > down_ ? up_ : down_; }  // in sigma, against h

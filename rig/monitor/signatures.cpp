@@ -35,7 +35,19 @@ double injector_score(const Evidence& e) {
   return 3.0 * line + gain_down + dip;
 }
 
+// Likelihood share of the sensor test's gain-error hypothesis (0.5 when it did not run).
+double p_gain_error(const Evidence& e) {
+  if (!std::isfinite(e.sensor_z_gain) || !std::isfinite(e.sensor_z_offset)) return 0.5;
+  const double a = std::exp(-0.5 * e.sensor_z_gain * e.sensor_z_gain);
+  const double b = std::exp(-0.5 * e.sensor_z_offset * e.sensor_z_offset);
+  return a + b > 0.0 ? a / (a + b) : 0.5;
+}
+
+// With the sensor test (the level moved), its verdict; otherwise the gain alone.
+constexpr double kSensorScore = 3.0;
+
 double transducer_gain_score(const Evidence& e) {
+  if (sensor_move(e) && std::isfinite(e.sensor_z_gain)) return kSensorScore * p_gain_error(e);
   const double zg = z_of(e, "gain");
   if (strength(std::abs(zg)) == 0.0 || e.z_line >= kSignificantZ) return 0.0;
   if (shape_is(e, ShapeKind::kPowerLossRecovered)) return 0.0;
@@ -52,6 +64,7 @@ double transducer_gain_score(const Evidence& e) {
 
 double transducer_offset_score(const Evidence& e) {
   if (!sensor_move(e)) return 0.0;
+  if (std::isfinite(e.sensor_z_gain)) return kSensorScore * (1.0 - p_gain_error(e));
   const double moved = std::max(std::abs(z_of(e, "gain")), others_max(e, "gain"));
   return moved < kSignificantZ ? 2.5 : 0.5;
 }

@@ -16,6 +16,7 @@
 // against a step without transient) and, for a sensor, the level step matching the gain.
 #pragma once
 
+#include <cmath>
 #include <map>
 #include <optional>
 #include <string>
@@ -26,20 +27,24 @@
 namespace rig::monitor {
 
 struct Evidence {
-  std::map<std::string, double> z;  // tracked parameter -> standardised deviation
+  std::map<std::string, double> z;          // tracked parameter -> standardised deviation
   std::map<std::string, double> deviation;  // in display units (dB, %, ms)
   std::string isolated;                     // "" when nothing stands out
   double z_residual = 0.0;
   double z_line = 0.0;
   std::optional<EventShape> shape;
   double level_ratio = 0.0;  // sensor step: final / level before (0 when none)
+  // The sensor test (sensor_test.hpp) when the level moved: the gain's deviation against a
+  // gain error (z_gain) and against an offset (z_offset); NaN when it did not run.
+  double sensor_z_gain = NAN;
+  double sensor_z_offset = NAN;
 };
 
 struct Diagnosis {
-  std::string cause;        // "" when nothing matches
-  std::string fault_class;  // "additive" / "multiplicative"
-  std::string check;        // what to check
-  double confidence = 0.0;  // best score / sum of scores (0..1)
+  std::string cause;                                   // "" when nothing matches
+  std::string fault_class;                             // "additive" / "multiplicative"
+  std::string check;                                   // what to check
+  double confidence = 0.0;                             // best score / sum of scores (0..1)
   std::vector<std::pair<std::string, double>> scores;  // every row, for the evidence JSON
 };
 

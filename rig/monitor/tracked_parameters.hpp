@@ -19,9 +19,9 @@
 namespace rig::monitor {
 
 struct TrackedParameter {
-  std::string name;     // "gain", "damping", "frequency", "delay"
-  std::string unit;     // of the displayed deviation: "dB", "%", "%", "ms"
-  double probe = 0.0;   // deviation used for the numerical sensitivity
+  std::string name;    // "gain", "damping", "frequency", "delay"
+  std::string unit;    // of the displayed deviation: "dB", "%", "%", "ms"
+  double probe = 0.0;  // deviation used for the numerical sensitivity
   model::TransferFunction (*deform)(const model::TransferFunction& base, double d) = nullptr;
   double (*display)(double d) = nullptr;  // deviation d in `unit`
 };

@@ -12,9 +12,8 @@ constexpr long kChunkSamples = 6000;  // excitation generated a minute at a time
 
 void print_alarm(std::FILE* out, const monitor::AlarmRecord& a) {
   if (out == nullptr) return;
-  nlohmann::json j = {{"type", "alarm"},          {"t_s", a.t_s},
-                      {"onset_s", a.onset_s},     {"cause", a.cause},
-                      {"class", a.fault_class},   {"confidence", a.confidence},
+  nlohmann::json j = {{"type", "alarm"},  {"t_s", a.t_s},           {"onset_s", a.onset_s},
+                      {"cause", a.cause}, {"class", a.fault_class}, {"confidence", a.confidence},
                       {"check", a.check}};
   j["evidence"] = nlohmann::json::parse(a.evidence_json, nullptr, false);
   std::fprintf(out, "%s\n", j.dump().c_str());
@@ -85,12 +84,12 @@ void MonitorRun::publish(RunContext& ctx, const monitor::BlockReport* report) {
     show_values(ctx, *report, summary.alarms);
   }
   for (const auto& a : core.take_alarms()) {
-      history.add_alarm(run_id, a);
-      ++summary.alarms;
-      print_alarm(options.alarms_out, a);
-      ctx.loop.event("alarm", fmt::format("{} ({}, confidence {:.2f}): check {}", a.cause,
-                                          a.fault_class, a.confidence, a.check));
-      ctx.view.message(fmt::format("ALARM at {:.0f} s: {} ({})", a.t_s, a.cause, a.fault_class));
+    history.add_alarm(run_id, a);
+    ++summary.alarms;
+    print_alarm(options.alarms_out, a);
+    ctx.loop.event("alarm", fmt::format("{} ({}, confidence {:.2f}): check {}", a.cause,
+                                        a.fault_class, a.confidence, a.check));
+    ctx.view.message(fmt::format("ALARM at {:.0f} s: {} ({})", a.t_s, a.cause, a.fault_class));
   }
   for (const auto& e : core.take_events()) {
     history.add_event(run_id, e.t_s, e.kind, e.text);

@@ -21,10 +21,10 @@ struct MonitorRun {
   long run_id = 0;
   const MonitorOptions& options;
   MonitorSummary& summary;
-  double sigma_pct = 0.0;      // planned excitation std, % of rated
-  std::uint64_t seed = 1;      // of the excitation (chunks continue it)
-  long chunk = 0;              // excitation chunks generated so far
-  std::string stop_reason;     // set when the run ends normally (operator, duration)
+  double sigma_pct = 0.0;   // planned excitation std, % of rated
+  std::uint64_t seed = 1;   // of the excitation (chunks continue it)
+  long chunk = 0;           // excitation chunks generated so far
+  std::string stop_reason;  // set when the run ends normally (operator, duration)
 
   // The core's block report and events into the history, the live view and stdout.
   void publish(RunContext& ctx, const monitor::BlockReport* report);

@@ -20,7 +20,7 @@ namespace {
 // The excitation's predicted peak response stays within the monitoring band: peak factor of
 // a Gaussian (or PRBS) response, as the supervisor's statistical cap assumes.
 constexpr double kPeakFactor = 4.0;
-constexpr double kPlanSamples = 16384;  // excitation simulated through the baseline to plan
+constexpr double kPlanSamples = 16384;   // excitation simulated through the baseline to plan
 constexpr double kSettleWindowS = 30.0;  // a new steady state: this much quiet power
 
 // The excitation std (% of rated) whose response through the baseline peaks at the band.
@@ -28,14 +28,12 @@ double plan_sigma_pct(const TestConfig& c, const model::TransferFunction& g, dou
   const Eigen::VectorXd e = test_excitation(c, static_cast<Eigen::Index>(kPlanSamples), 1.0, 7);
   const Eigen::VectorXd y = model::simulate(g, e, 1.0 / c.link.sample_rate_hz);
   const Eigen::VectorXd tail = y.tail(y.size() / 2);
-  const double std_per_pct =
-      std::sqrt((tail.array() - tail.mean()).square().mean());
+  const double std_per_pct = std::sqrt((tail.array() - tail.mean()).square().mean());
   if (!(std_per_pct > 0.0)) return 0.0;
   return std::min(band_kw / (kPeakFactor * std_per_pct), c.safety.clamp_pct / kPeakFactor);
 }
 
-monitor::MonitorSettings core_settings(const TestConfig& c, const MonitorOptions& o,
-                                       double p0_kw) {
+monitor::MonitorSettings core_settings(const TestConfig& c, const MonitorOptions& o, double p0_kw) {
   monitor::MonitorSettings s;
   s.dt_s = 1.0 / c.link.sample_rate_hz;
   s.coupling_rc_s = c.excitation.ac_coupling_rc_s > 0.0 ? c.excitation.ac_coupling_rc_s : 1.6;
@@ -65,8 +63,8 @@ std::optional<double> wait_for_steady(RunContext& ctx, MonitorRun& run) {
     const TickResult r = ctx.loop.prime();
     if (!r.sample) {
       if (ctx.loop.link_gone()) {
-        ctx.fail(kExitLinkFault, "link lost while waiting for a steady state: " +
-                                     ctx.loop.last_link_error());
+        ctx.fail(kExitLinkFault,
+                 "link lost while waiting for a steady state: " + ctx.loop.last_link_error());
         return std::nullopt;
       }
       continue;
@@ -131,9 +129,9 @@ void monitor_loop(RunContext& ctx, MonitorRun& run) {
     }
     const std::optional<double> p0 = wait_for_steady(ctx, run);
     if (!p0) return;
-    run.history.add_event(run.run_id, ctx.loop.t_s(), "re-baselined",
-                          fmt::format("new steady state: P0 {:.1f} kW (was {:.1f} kW)", *p0,
-                                      ctx.p0_kw));
+    run.history.add_event(
+        run.run_id, ctx.loop.t_s(), "re-baselined",
+        fmt::format("new steady state: P0 {:.1f} kW (was {:.1f} kW)", *p0, ctx.p0_kw));
     ctx.p0_kw = *p0;
     ctx.loop.set_p0(*p0);
     run.core.resume(*p0);
@@ -147,8 +145,7 @@ void monitor_loop(RunContext& ctx, MonitorRun& run) {
 namespace {
 
 std::unique_ptr<io::RecordingWriter> open_recorder(const TestConfig& c,
-                                                   const SessionOptions& options,
-                                                   bool keep) {
+                                                   const SessionOptions& options, bool keep) {
   io::RecordingWriterOptions wo;
   wo.flush_period = std::chrono::milliseconds(static_cast<long>(c.output.flush_interval_s * 1000));
   wo.sync_to_disk = false;
@@ -223,7 +220,8 @@ MonitorSummary run_monitor(const TestConfig& config, const SessionOptions& optio
     recorder = open_recorder(config, options, mo.keep_recording);
   } catch (const std::exception& e) {
     link.close();
-    return finish(kExitSafety, std::string("rig failure: cannot create the recording: ") + e.what());
+    return finish(kExitSafety,
+                  std::string("rig failure: cannot create the recording: ") + e.what());
   }
   const bool tty = LiveView::is_terminal(options.live_out);
   LiveView view(options.live_out, tty, config.output.live_interval_s, tty ? 0.1 : 1.0);

@@ -48,7 +48,8 @@ std::string causes(const RunResult& r) {
   for (const auto& a : r.alarms) {
     s += a.cause + " @" + std::to_string(a.t_s) + " " + a.evidence_json + "; ";
   }
-  for (const auto& e : r.events) s += "\n  event " + e.kind + " @" + std::to_string(e.t_s) + ": " + e.text;
+  for (const auto& e : r.events)
+    s += "\n  event " + e.kind + " @" + std::to_string(e.t_s) + ": " + e.text;
   return s;
 }
 
@@ -112,7 +113,7 @@ TEST(MonitorCore, LevelStepWithoutTransientIsTheTransducerOffset) {
   SyntheticChange c;
   c.at_s = 900.0;
   c.level_step_kw = 70.0;  // 2 % of P0
-  const RunResult r = run(set, c, 1400.0);
+  const RunResult r = run(set, c, 1700.0);
   ASSERT_FALSE(r.alarms.empty()) << causes(r);
   EXPECT_EQ(r.alarms.front().cause, "power transducer offset") << causes(r);
   EXPECT_EQ(r.alarms.front().fault_class, "additive");
@@ -174,8 +175,8 @@ TEST(EventShape, TellsASensorStepFromARecoveredLossAndALoadChange) {
   const auto dip = shaped_record(
       [](double t) { return t >= 0 ? -300.0 * (t / 0.5) * std::exp(1.0 - t / 0.5) : 0.0; });
   EXPECT_EQ(classify_shape(dip, 0.01, 1900, 2050).kind, ShapeKind::kPowerLossRecovered);
-  const auto load = shaped_record(
-      [](double t) { return t >= 0 ? 150.0 * (1.0 - std::exp(-t / 2.0)) : 0.0; });
+  const auto load =
+      shaped_record([](double t) { return t >= 0 ? 150.0 * (1.0 - std::exp(-t / 2.0)) : 0.0; });
   EXPECT_EQ(classify_shape(load, 0.01, 1900, 2050).kind, ShapeKind::kLevelChange);
 }
 
