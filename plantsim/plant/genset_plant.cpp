@@ -10,10 +10,24 @@ namespace plantsim {
 namespace {
 
 constexpr double kMaxDeadTimeS = 1.0;  // engine.dead_time_s upper bound; sizes the history
+constexpr double kSameTimeS = 1e-9;    // times closer than this are one (round-off)
 
 // The exact bias path needs the setpoint path to be linear: no deadband on e, no rate limit.
 bool linear_setpoint_path(const Params& p) {
   return p[P::kGovDeadband] == 0.0 && p[P::kGovRate] == 0.0;
+}
+
+// The ramp for a change, between the values in effect before and after it. A ramp of
+// engine.dead_time_s runs between dead times: its 0 stands for the formula 30/N + 60/(n N),
+// so from or to 0 the ramp starts or ends at the formula's value, never at no dead time.
+ParamRamp ramp_for(const TimedChange& change, const Params& before, const Params& after) {
+  ParamRamp r{change.param,         change.time_s, change.time_s + change.ramp_s,
+              before[change.param], change.value,  change.value};
+  if (change.param == P::kEngDeadTime) {
+    r.from = dead_time_s(before);
+    r.to = dead_time_s(after);
+  }
+  return r;
 }
 
 SolverOptions solver_options(const Params& p) {
@@ -150,8 +164,7 @@ void GensetPlant::apply(const TimedChange& change) {
   if (change.ramp_s > 0.0) {
     Params check = p;
     check.set(change.param, change.value, where);
-    ramps_.start({change.param, change.time_s, change.time_s + change.ramp_s, p[change.param],
-                  change.value});
+    ramps_.start(ramp_for(change, p, check));
   } else {
     ramps_.cancel(change.param);
     p.set(change.param, change.value, where);
@@ -219,8 +232,11 @@ bool GensetPlant::advance_solver(double t_now, double t_end) {
       const double t_ramp = std::max(ramps_.next_end_s(), t_now);
       const double t_handback = engine_handback_s();
       const double t_param = std::min(t_change, t_ramp);
-      const double t_event = std::min(t_param, t_handback);
+      double t_event = std::min(t_param, t_handback);
       if (t_event > t_end) break;
+      // Within round-off of the tick's end (t_now + dt against t0 + ramp) an event happens at
+      // the end: after the restart CVODE could not step that round-off (CV_TOO_CLOSE).
+      if (t_event > t_end - kSameTimeS) t_event = t_end;
       solver_->advance_to(t_event, horizon_s(t_now, t_event, look_ahead));
       sync_state();
       advance_bias_path(t_event - t_seg);

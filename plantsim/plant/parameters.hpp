@@ -142,13 +142,16 @@ class Params {
   std::array<double, kParamCount> v_{};
 };
 
-// A parameter moving linearly from `from` at t0_s to `to` at t1_s (t1_s > t0_s).
+// A parameter moving linearly from `from` at t0_s to `to` at t1_s (t1_s > t0_s). At t1_s
+// it takes `end`, which differs from `to` only where a value stands for another: ramped
+// to engine.dead_time_s = 0 (the formula), a ramp runs to the formula's value and ends on 0.
 struct ParamRamp {
   P param;
   double t0_s = 0.0;
   double t1_s = 0.0;
   double from = 0.0;
   double to = 0.0;
+  double end = 0.0;
   double at(double t_s) const {
     if (t_s <= t0_s) return from;
     if (t_s >= t1_s) return to;

@@ -38,7 +38,7 @@ void RampSet::finish_next(Params* p) {
   if (ramps_.empty()) return;
   const auto first = std::min_element(ramps_.begin(), ramps_.end(),
                                       [](const auto& a, const auto& b) { return a.t1_s < b.t1_s; });
-  p->set_unchecked(first->param, first->to);
+  p->set_unchecked(first->param, first->end);
   ramps_.erase(first);
   classify();
 }

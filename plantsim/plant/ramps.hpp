@@ -20,7 +20,7 @@ class RampSet {
   void cancel(P param);
   bool empty() const { return ramps_.empty(); }
   double next_end_s() const;  // infinity when none runs
-  // Ends the ramp that ends first: its parameter takes the final value exactly.
+  // Ends the ramp that ends first: its parameter takes the final value (ParamRamp::end).
   void finish_next(Params* p);
   // Sets every ramped parameter to its value at t_s.
   void apply(Params* p, double t_s) const {
