@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 namespace plantsim {
 namespace {
@@ -9,6 +10,9 @@ namespace {
 // A corner within this fraction of a tick of the last knot is that knot (round-off of
 // t_newest - i dt + Td against a knot time computed the same way).
 constexpr double kSameCornerTicks = 1e-9;
+// Round-off of times far from zero (a day of plant time is 8.6e4 s): the tolerance of a
+// corner's tick count grows with the time's magnitude, this many ulps of it.
+constexpr double kRoundOffUlps = 64.0;
 // Knots dropped by prune() are erased once this many have piled up (no per-tick moves).
 constexpr std::size_t kCompactAfterKnots = 256;
 
@@ -47,11 +51,19 @@ bool EnginePath::anchor(const Params& p, double t_s, State s, const FuelDelayLin
 
 bool EnginePath::extend(const FuelDelayLine& line) {
   const double dt = line.dt_s();
+  const double tol_ticks =
+      std::max(kSameCornerTicks, kRoundOffUlps * std::numeric_limits<double>::epsilon() *
+                                     std::abs(line.newest_time_s()) / dt);
+  long newer_than = std::numeric_limits<long>::max();
   while (valid_) {
-    // The oldest sample taken after the last knot's fuel time t_last - Td.
+    // The oldest sample taken after the last knot's fuel time t_last - Td. Each corner takes a
+    // newer sample than the one before (a corner recomputed a round-off later is not new), so
+    // the loop ends whatever the round-off at large times.
     const double ticks_back = (line.newest_time_s() - (knots_.back().t_s - td_s_)) / dt;
-    const long back = static_cast<long>(std::ceil(ticks_back - kSameCornerTicks)) - 1;
+    const long back =
+        std::min(static_cast<long>(std::ceil(ticks_back - tol_ticks)) - 1, newer_than - 1);
     if (back < 0) break;
+    newer_than = back;
     const auto b = static_cast<std::size_t>(back);
     const double t_corner = line.newest_time_s() - static_cast<double>(back) * dt + td_s_;
     if (!push_corner(t_corner, line.sample(b))) break;

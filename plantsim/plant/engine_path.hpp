@@ -42,6 +42,7 @@ class EnginePath {
 
   bool valid() const { return valid_; }
   double valid_until_s() const { return knots_.back().t_s; }
+  std::size_t knots() const { return knots_.size(); }  // stored (live and not yet compacted)
   double torque_at(double t_s) const;
   State at(double t_s) const;
 

@@ -36,6 +36,25 @@ class EngineOde : public OdeSystem {
 // deterministic saw of +-0.01 pu.
 double rack_pu(int k) { return 0.7 + 0.05 * std::sin(0.019 * k) + 0.01 * ((k * 7) % 5 - 2) / 2.0; }
 
+// Days into a run, the corner times carry round-off of ~1e-11 s: extending must still add one
+// knot per new sample (an earlier tolerance let the same corner repeat forever there).
+TEST(EnginePath, ExtendsOneKnotPerSampleDaysIntoARun) {
+  const Params p = preset("stornoway");
+  for (const double start_s : {0.0, 8.64e4, 8.64e5 + 0.000123}) {
+    FuelDelayLine line(kDt, 0.2, rack_pu(0));
+    for (int k = 1; k <= 150; ++k) line.push(start_s + k * kDt, rack_pu(k));
+    EnginePath path;
+    ASSERT_TRUE(path.anchor(p, start_s + 0.1004, {0.69, 0.71}, line)) << start_s;
+    for (int k = 151; k <= 2150; ++k) {
+      line.push(start_s + k * kDt, rack_pu(k));
+      ASSERT_TRUE(path.extend(line));
+      path.prune(start_s + k * kDt - 0.01);
+      ASSERT_NEAR(path.valid_until_s(), start_s + k * kDt + dead_time_s(p), 1e-6) << start_s;
+    }
+    EXPECT_LT(path.knots(), 600u) << start_s;
+  }
+}
+
 TEST(EnginePath, ClosedFormMatchesTheEngineOde) {
   const Params p = preset("stornoway");
   FuelDelayLine line(kDt, 0.2, rack_pu(0));
