@@ -157,9 +157,18 @@ void Monitor::learn(const BlockFit& f, const std::vector<double>& x, double t_s)
   if (static_cast<double>(++learn_blocks_) * block_s >= s_.learn_s) finish_learning(t_s, true);
 }
 
+// A mean learnt from n blocks is itself uncertain by sigma / sqrt(n): the CUSUM's reference
+// value is raised by two of these standard errors, so that the designed false-alarm rate holds
+// for any error of the mean within its 95 % range (h stays designed for k).
+double reference_for(const CusumDesign& d, std::size_t n) {
+  return d.k + 2.0 / std::sqrt(static_cast<double>(std::max<std::size_t>(n, 1)));
+}
+
 void Monitor::finish_learning(double t_s, bool spreads) {
+  centred_p0_kw_ = s_.p0_kw;
   for (std::size_t i = 0; i < names_.size(); ++i) {
     if (dev_weight_[i] > 0.0) mean_dev_[i] = dev_sum_[i] / dev_weight_[i];
+    stats_[i].cusum.set_reference(reference_for(design_, raw_dev_[i].size()));
     if (spreads) {
       std::vector<double> t;
       for (std::size_t k = 0; k < raw_dev_[i].size(); ++k) {
@@ -173,12 +182,16 @@ void Monitor::finish_learning(double t_s, bool spreads) {
   }
   for (std::size_t j = names_.size(); j < stats_.size(); ++j) {
     Statistic& st = stats_[j];
+    // The residual and the line do not move with the operating point: after a load change
+    // their means stay (only an alarm's new state re-centres them).
     if (spreads) {
       st.spread = learn_spread(st.learn);
-    } else if (!st.learn.empty()) {
+      st.cusum.set_reference(reference_for(design_, st.learn.size()));
+    } else if (!st.learn.empty() && recentre_all_) {
       double m = 0.0;
       for (double v : st.learn) m += v;
       st.spread.mean = m / static_cast<double>(st.learn.size());
+      st.cusum.set_reference(reference_for(design_, st.learn.size()));
     }
     st.learn.clear();
   }
@@ -188,6 +201,7 @@ void Monitor::finish_learning(double t_s, bool spreads) {
   }
   if (spreads) {
     level_.spread = learn_spread(level_.learn);
+    level_.cusum.set_reference(reference_for(design_, level_.learn.size()));
     level_.learn.clear();
     learnt_ = true;
     sec_sigma_ = learn_spread(sec_learn_).raw_sigma;

@@ -48,7 +48,7 @@ struct MonitorSettings {
   double false_alarms_per_month = 0.5;  // designed, all statistics together
   double cusum_k = 0.75;                // fastest detection for a 1.5 sigma shift
   int decision_blocks = 6;              // evidence gathered after an event before naming it
-  int recentre_blocks = 10;             // after an alarm, the means follow the new state
+  int recentre_blocks = 20;  // after an alarm or a load change, the means follow the new state
   double tracking_forgetting = 0.8;     // per block, for the tracked-parameter trends
   double event_pre_s = 60.0;            // raw power kept before a level event / trip
   double event_post_s = 30.0;           // and seen after it before its shape is judged
@@ -163,6 +163,8 @@ class Monitor {
   std::optional<BlockFit> last_fit_;
   std::vector<double> tracked_display_;
   bool load_changed_ = false;
+  double centred_p0_kw_ = 0.0;  // P0 when the means were last centred
+  bool recentre_all_ = false;   // the running re-centring follows an alarm (not a load change)
   // Events.
   std::vector<double> ring_;    // raw power, circular
   std::vector<double> ring_u_;  // applied excitation of the same samples

@@ -11,7 +11,11 @@
 namespace rig::monitor {
 namespace {
 
-constexpr double kOperatingPointShare = 0.05;  // see monitor.cpp
+// Load changes that have moved P0 by more than this share since the means were last centred
+// re-centre them: the thresholds are conditioned on the operating point (the swing mode's
+// frequency moves with the load angle: about 0.5 % for a 4 % load change on Stornoway, many
+// block sigmas).
+constexpr double kOperatingPointShare = 0.01;
 constexpr int kSecondsKept = 60;               // 1 s means forming the recent range
 constexpr int kSecondsExcluded = 3;            // the newest ones are judged, not the range
 constexpr int kLevelHits = 2;                  // consecutive seconds beyond the range
@@ -156,7 +160,6 @@ void Monitor::judge_event(double t_s) {
 }
 
 void Monitor::resume(double p0_kw) {
-  const double old = s_.p0_kw;
   s_.p0_kw = p0_kw;
   restart_block();
   rebaseline_ = false;
@@ -166,8 +169,10 @@ void Monitor::resume(double p0_kw) {
   sec_sum_ = 0.0;
   sec_n_ = 0;
   level_hits_ = 0;
-  if (load_changed_ && learnt_ && std::abs(p0_kw - old) > kOperatingPointShare * old) {
+  if (load_changed_ && learnt_ &&
+      std::abs(p0_kw - centred_p0_kw_) > kOperatingPointShare * centred_p0_kw_) {
     recentre_left_ = s_.recentre_blocks;  // thresholds conditioned on the new operating point
+    recentre_all_ = false;
   }
   load_changed_ = false;
 }
@@ -263,6 +268,7 @@ void Monitor::alarm(double t_s, int blocks, const std::string& trigger) {
   }
   // The new state becomes the reference for further changes.
   recentre_left_ = s_.recentre_blocks;
+  recentre_all_ = true;
   shape_.reset();
   shape_level_ratio_ = 0.0;
   decide_in_ = -1;
@@ -357,6 +363,7 @@ void Monitor::level_drift(const std::vector<double>& /*x*/, double t_s) {
                                    "load change: a slow load move",
                                    dev)});
     last_load_event_s_ = t_s;
+    load_changed_ = true;
   } else {
     EventShape e;
     e.kind = ShapeKind::kSlowDrift;

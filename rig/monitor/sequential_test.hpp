@@ -53,6 +53,8 @@ class Cusum {
     up_ = down_ = 0.0;
     run_ = 0;
   }
+  // The reference value used from now on (>= the design's k; see monitor.cpp).
+  void set_reference(double k) { d_.k = k; }
   double upper() const { return up_; }
   double lower() const { return down_; }
   double level() const { return up_ > down_ ? up_ : down_; }  // in sigma, against h

@@ -198,11 +198,17 @@ def free_runs(args, baseline, work):
 
 
 def memory_run(args, baseline, work):
+    """A fault-free run (load changes and drift as the others) with its memory sampled."""
     out = os.path.join(work, 'memory')
-    cmd = [args.rig, 'monitor', '--emulate', '--seed', str(args.seed), '--baseline', baseline,
-           '--out', out, '--duration', str(args.memory_hours * 3600.0), '--quiet']
+    seed = args.seed + 99
+    changes = free_run_changes(random.Random(seed), args.memory_hours)
+    cmd = [args.rig, 'monitor', '--emulate', '--seed', str(seed), '--baseline', baseline,
+           '--out', out, '--duration', str(args.memory_hours * 3600.0), '--quiet',
+           '--max-trips', '1000']
+    for c in changes:
+        cmd += ['--fault', c]
     t0 = time.time()
-    p = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+    p = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True)
     samples = []
     while p.poll() is None:
         try:
@@ -214,6 +220,7 @@ def memory_run(args, baseline, work):
             pass
         time.sleep(0.5)
     wall = time.time() - t0
+    alarms = [json.loads(l) for l in p.stdout.read().splitlines() if l.startswith('{')]
     rate = args.memory_hours * 3600.0 / wall  # plant seconds per wall second
     def rss_at(plant_s):
         w = plant_s / rate
@@ -221,7 +228,10 @@ def memory_run(args, baseline, work):
         return best[1] / 1024.0
     print(f'memory: {args.memory_hours:g} h of plant time in {wall:.0f} s wall; resident '
           f'{rss_at(3600.0):.1f} MiB at 1 h, {samples[-1][1] / 1024.0:.1f} MiB at the end, '
-          f'peak {max(s[2] for s in samples) / 1024.0:.1f} MiB (exit {p.returncode})')
+          f'peak {max(s[2] for s in samples) / 1024.0:.1f} MiB (exit {p.returncode}); '
+          f'{len(changes) - 1} load changes, {len(alarms)} alarms (false) '
+          f'{[a["cause"] for a in alarms]}')
+    return p.returncode
 
 
 def main():
@@ -252,7 +262,7 @@ def main():
     if args.free_hours > 0:
         failed |= any(r['code'] != 0 for r in free_runs(args, baseline, work))
     if args.memory_hours > 0:
-        memory_run(args, baseline, work)
+        failed |= memory_run(args, baseline, work) != 0
     if not args.out:
         shutil.rmtree(work, ignore_errors=True)
     return 1 if failed else 0
