@@ -16,7 +16,10 @@ constexpr std::size_t kRecentBlocks = 15;
 }  // namespace
 
 Monitor::Monitor(const model::TransferFunction& baseline, const MonitorSettings& s)
-    : s_(s), cu_(s.dt_s, s.coupling_rc_s), cy_(s.dt_s, s.coupling_rc_s) {
+    : s_(s),
+      cu_(s.dt_s, s.coupling_rc_s),
+      cy_(s.dt_s, s.coupling_rc_s),
+      mmfm_(s.dt_s, s.block_samples, baseline.delay_s) {
   models_.push_back(baseline);
   const bool has_pair = dominant_pair(baseline) >= 0;
   for (const TrackedParameter& p : tracked_parameters()) {
@@ -68,6 +71,7 @@ std::optional<BlockReport> Monitor::push(double t_s, double u_pct, double y_kw, 
   const double yc = cy_.step(y_kw);
   u_hist_(s_.warmup_samples + in_block_) = uc;
   y_blk_(in_block_) = yc;
+  mmfm_.push(uc, yc);
   if (speed > 0.0 && std::isfinite(speed)) {
     speed_sum_ += speed;
     ++speed_n_;
@@ -85,6 +89,7 @@ std::optional<BlockReport> Monitor::push(double t_s, double u_pct, double y_kw, 
 }
 
 void Monitor::restart_block() {
+  if (in_block_ > 0 || coupler_primed_) mmfm_.reset();
   coupler_primed_ = false;
   in_block_ = 0;
   u_hist_.setZero();
@@ -134,6 +139,11 @@ void Monitor::end_block(double t_s, BlockReport& report) {
     watch(x, f, t_s);
   }
   tracked_values(f, report);
+  if (const auto m = mmfm_.estimate()) {
+    report.values.push_back({"mmfm_gain_kw_per_pct", m->gain, std::nullopt, std::nullopt});
+    report.values.push_back({"mmfm_fn_hz", m->fn_hz, std::nullopt, std::nullopt});
+    report.values.push_back({"mmfm_zeta", m->zeta, std::nullopt, std::nullopt});
+  }
   level_drift(x, t_s);
   if (learnt_ && recentre_left_ == 0) sensor_block(f, t_s);
 }
@@ -246,6 +256,7 @@ void Monitor::watch(const std::vector<double>& x, const BlockFit& f, double t_s)
     deferred_.reset();
     return;
   }
+  if (amplitude_block(f, t_s)) return;
   if (decide_in_ > 0) {
     deferred_.reset();
     if (--decide_in_ == 0) alarm(t_s, s_.decision_blocks, "the level event's evidence");

@@ -28,9 +28,11 @@
 #include <vector>
 
 #include "rig/model/transfer_function.hpp"
+#include "rig/monitor/amplitude_test.hpp"
 #include "rig/monitor/block_analysis.hpp"
 #include "rig/monitor/event_shape.hpp"
 #include "rig/monitor/history.hpp"
+#include "rig/monitor/mmfm_tracker.hpp"
 #include "rig/monitor/sensor_test.hpp"
 #include "rig/monitor/sequential_test.hpp"
 #include "rig/monitor/signatures.hpp"
@@ -49,11 +51,11 @@ struct MonitorSettings {
   double cusum_k = 0.75;                // fastest detection for a 1.5 sigma shift
   int decision_blocks = 6;              // evidence gathered after an event before naming it
   int recentre_blocks = 20;  // after an alarm or a load change, the means follow the new state
-  double tracking_forgetting = 0.8;     // per block, for the tracked-parameter trends
-  double event_pre_s = 60.0;            // raw power kept before a level event / trip
-  double event_post_s = 30.0;           // and seen after it before its shape is judged
-  double level_sigmas = 8.0;            // 1 s mean beyond this many sigmas of its recent range
-  double min_level_pct = 0.5;           // and beyond this % of P0: a level event
+  double tracking_forgetting = 0.8;  // per block, for the tracked-parameter trends
+  double event_pre_s = 60.0;         // raw power kept before a level event / trip
+  double event_post_s = 30.0;        // and seen after it before its shape is judged
+  double level_sigmas = 8.0;         // 1 s mean beyond this many sigmas of its recent range
+  double min_level_pct = 0.5;        // and beyond this % of P0: a level event
   // A level drift found by the level CUSUM is a load change when a load event or re-baseline
   // happened within this time (the governor's setpoint cannot be read), else a sensor drift.
   double load_event_memory_s = 1800.0;
@@ -97,6 +99,8 @@ class Monitor {
   bool learning() const { return !learnt_; }
   double p0_kw() const { return s_.p0_kw; }
   const model::TransferFunction& baseline() const { return models_[0]; }
+  // The share of the planned excitation to apply now (1, or a level of the amplitude test).
+  double excitation_scale() const { return amp_ ? amp_->scale() : 1.0; }
   const CusumDesign& design() const { return design_; }
   long alarms() const { return alarm_count_; }
 
@@ -126,6 +130,7 @@ class Monitor {
   void alarm(double t_s, int onset_blocks, const std::string& trigger);
   void level_drift(const std::vector<double>& x, double t_s);
   void sensor_block(const BlockFit& f, double t_s);
+  bool amplitude_block(const BlockFit& f, double t_s);
   double event_line_z(const std::vector<double>& record) const;
   Evidence evidence(int blocks) const;
   void level_check(double t_s, double y_kw);
@@ -180,6 +185,8 @@ class Monitor {
   double shape_level_ratio_ = 0.0;
   int decide_in_ = -1;                // blocks until an event's evidence is named
   std::optional<SensorTest> sensor_;  // a measured level moved: gain error or offset?
+  std::optional<AmplitudeTest> amp_;  // a phase lag: backlash or dead time?
+  double amp_z_ = NAN;                // the last amplitude test's verdict, as evidence
   double sensor_z_gain_ = NAN, sensor_z_offset_ = NAN;
   std::optional<std::pair<std::string, int>> deferred_;  // a crossing awaiting confirmation
   bool rebaseline_ = false;
@@ -192,6 +199,7 @@ class Monitor {
   double level_ref_kw_ = 0.0;
   double last_load_event_s_ = -1e30;  // a load change or re-baseline
   double speed_rpm_ = 0.0;            // latest, for the engine cycle
+  MmfmTracker mmfm_;                  // the thesis's view of the same transfer function
   double block_level_kw_ = 0.0;       // mean raw power of the latest block
   double event_line_z_ = 0.0;         // the line in the latest event's record
 };

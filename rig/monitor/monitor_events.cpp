@@ -16,10 +16,10 @@ namespace {
 // frequency moves with the load angle: about 0.5 % for a 4 % load change on Stornoway, many
 // block sigmas).
 constexpr double kOperatingPointShare = 0.01;
-constexpr int kSecondsKept = 60;               // 1 s means forming the recent range
-constexpr int kSecondsExcluded = 3;            // the newest ones are judged, not the range
-constexpr int kLevelHits = 2;                  // consecutive seconds beyond the range
-constexpr double kTrackSigmas = 4.0;           // trend thresholds: 4 sigma of the estimate
+constexpr int kSecondsKept = 60;      // 1 s means forming the recent range
+constexpr int kSecondsExcluded = 3;   // the newest ones are judged, not the range
+constexpr int kLevelHits = 2;         // consecutive seconds beyond the range
+constexpr double kTrackSigmas = 4.0;  // trend thresholds: 4 sigma of the estimate
 
 std::string series_name(const TrackedParameter& p) {
   std::string unit = p.unit == "%" ? "pct" : p.unit;
@@ -219,6 +219,7 @@ Evidence Monitor::evidence(int blocks) const {
   ev.level_ratio = shape_level_ratio_;
   ev.sensor_z_gain = sensor_z_gain_;
   ev.sensor_z_offset = sensor_z_offset_;
+  ev.amplitude_z = amp_z_;
   if (shape_) ev.z_line = std::max(ev.z_line, event_line_z_);
   return ev;
 }
@@ -242,9 +243,46 @@ std::string evidence_json(const Evidence& ev, const Diagnosis& d, const std::str
   return j.dump();
 }
 
+// Causes a phase lag may stand for; the amplitude test tells them apart before naming.
+bool lag_cause(const std::string& cause) {
+  return cause == "actuator wear (backlash)" || cause == "fuel dead time or combustion lag change";
+}
+
+// One block of a running amplitude test; true while it runs (the block is its own).
+bool Monitor::amplitude_block(const BlockFit& f, double t_s) {
+  if (!amp_) return false;
+  deferred_.reset();
+  const auto it = std::find(names_.begin(), names_.end(), "delay");
+  if (it == names_.end()) {
+    amp_.reset();
+    return false;
+  }
+  const auto i = static_cast<std::size_t>(it - names_.begin());
+  const auto k = static_cast<Eigen::Index>(i);
+  const double c = std::isfinite(stats_[i].spread.sigma) ? stats_[i].spread.sigma : 1.0;
+  amp_->add(f.joint(k) - mean_dev_[i], c * f.joint_se(k));
+  if (!amp_->done()) return true;
+  amp_z_ = amp_->z();
+  events_.push_back(
+      {t_s, "amplitude test",
+       fmt::format(
+           "delay deviation {:+.1f} ms at {:g} x the excitation, {:+.1f} ms "
+           "at full: z {:.1f} ({})",
+           1e3 * amp_->low(), AmplitudeTest::kLowScale, 1e3 * amp_->high(), amp_z_,
+           amp_z_ >= kSignificantZ ? "amplitude-dependent: play" : "independent of amplitude")});
+  const AmplitudeTest done = *amp_;
+  amp_.reset();
+  alarm(t_s, done.onset_blocks(), done.trigger() + " and the amplitude test");
+  return true;
+}
+
 void Monitor::alarm(double t_s, int blocks, const std::string& trigger) {
   const Evidence ev = evidence(blocks);
   Diagnosis d = diagnose(ev);
+  if (lag_cause(d.cause) && !std::isfinite(amp_z_) && latched_.count(d.cause) == 0) {
+    amp_.emplace(trigger, blocks);  // named once the amplitude test has run
+    return;
+  }
   if (d.cause.empty()) {
     d.cause = "unnamed change";
     d.fault_class = "unknown";
@@ -274,6 +312,7 @@ void Monitor::alarm(double t_s, int blocks, const std::string& trigger) {
   decide_in_ = -1;
   sensor_.reset();
   sensor_z_gain_ = sensor_z_offset_ = NAN;
+  amp_z_ = NAN;
   for (auto& st : stats_) st.cusum.reset();
   level_.cusum.reset();
 }

@@ -80,6 +80,8 @@ double damping_score(const Evidence& e) {
 double delay_score(const Evidence& e) {
   const double z = z_of(e, "delay");
   if (strength(z) == 0.0) return 0.0;
+  // The amplitude test decides between a dead time and play when it ran.
+  if (std::isfinite(e.amplitude_z)) return e.amplitude_z < kSignificantZ ? 2.0 + strength(z) : 0.0;
   return strength(z) + (e.isolated == "delay" ? 1.0 : 0.0) +
          (z >= others_max(e, "delay") ? 1.0 : 0.0);
 }
@@ -89,6 +91,10 @@ constexpr double kLineQuietZ = 2.0;
 
 double backlash_score(const Evidence& e) {
   if (e.z_line >= kLineQuietZ || e.shape) return 0.0;
+  if (std::isfinite(e.amplitude_z) && e.amplitude_z >= kSignificantZ) {
+    return 2.0 + strength(e.amplitude_z) + strength(-z_of(e, "gain"));
+  }
+  if (std::isfinite(e.amplitude_z)) return 0.0;
   // Play in the rack: small-signal gain lost (the describing function of backlash), a phase
   // lag, and a response no linear model explains (the residual grows).
   const double loss = strength(-z_of(e, "gain"));

@@ -56,7 +56,7 @@ class MonitorPhase final : public SupervisedPhase {
     if (j == 0 || e_.size() == 0) {
       e_ = test_excitation(ctx.config, kChunkSamples, run_.sigma_pct, run_.seed + run_.chunk++);
     }
-    return e_(j);
+    return e_(j) * run_.core.excitation_scale();
   }
 
   void consume(RunContext& ctx, const TickResult& r, long /*k*/) override {

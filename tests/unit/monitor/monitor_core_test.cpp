@@ -205,3 +205,37 @@ TEST(TrackedParameters, DeformationsMoveOnlyTheirParameter) {
 
 }  // namespace
 }  // namespace rig::monitor
+
+namespace rig::monitor {
+namespace {
+
+TEST(SensorTest, TellsAGainErrorFromAnOffset) {
+  // A +4 % level with the gain following it (gain error) and with the gain still (offset);
+  // per-block gain standard error 2 %.
+  SensorTest gain(3500.0, 6), offset(3500.0, 6);
+  for (int k = 0; k < SensorTest::kMaxBlocks && !(gain.decided() && offset.decided()); ++k) {
+    const double wobble = (k % 2 == 0 ? 0.004 : -0.004);
+    gain.add(3500.0 * 1.04, 0.04 + wobble, 0.02);
+    offset.add(3500.0 * 1.04, wobble, 0.02);
+  }
+  ASSERT_TRUE(gain.decided());
+  ASSERT_TRUE(offset.decided());
+  EXPECT_GT(gain.p_gain(), 0.95);
+  EXPECT_LT(offset.p_gain(), 0.05);
+}
+
+TEST(AmplitudeTest, AmplitudeDependentLagIsPlay) {
+  AmplitudeTest play("t", 1), dead("t", 1);
+  for (int k = 0; k < AmplitudeTest::kBlocks; ++k) {
+    const bool low = play.scale() < 1.0;
+    // Play: the lag doubles at half amplitude (b / A); dead time: the same lag at both.
+    play.add(low ? 0.008 : 0.004, low ? 0.001 : 0.0005);
+    dead.add(0.004, low ? 0.001 : 0.0005);
+  }
+  ASSERT_TRUE(play.done());
+  EXPECT_GT(play.z(), kSignificantZ);
+  EXPECT_LT(std::abs(dead.z()), 1.0);
+}
+
+}  // namespace
+}  // namespace rig::monitor
