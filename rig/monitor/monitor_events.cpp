@@ -252,7 +252,7 @@ bool lag_cause(const std::string& cause) {
 bool Monitor::amplitude_block(const BlockFit& f, double t_s) {
   if (!amp_) return false;
   deferred_.reset();
-  const auto it = std::find(names_.begin(), names_.end(), "delay");
+  const auto it = std::find(names_.begin(), names_.end(), "gain");
   if (it == names_.end()) {
     amp_.reset();
     return false;
@@ -265,11 +265,11 @@ bool Monitor::amplitude_block(const BlockFit& f, double t_s) {
   amp_z_ = amp_->z();
   events_.push_back(
       {t_s, "amplitude test",
-       fmt::format(
-           "delay deviation {:+.1f} ms at {:g} x the excitation, {:+.1f} ms "
-           "at full: z {:.1f} ({})",
-           1e3 * amp_->low(), AmplitudeTest::kLowScale, 1e3 * amp_->high(), amp_z_,
-           amp_z_ >= kSignificantZ ? "amplitude-dependent: play" : "independent of amplitude")});
+       fmt::format("gain deviation {:+.2f} % at {:g} x the excitation, {:+.2f} % "
+                   "at full: z {:.1f} ({})",
+                   1e2 * amp_->low(), AmplitudeTest::kLowScale, 1e2 * amp_->high(), amp_z_,
+                   amp_z_ >= AmplitudeTest::kPlayZ ? "amplitude-dependent: play"
+                                                   : "independent of amplitude")});
   const AmplitudeTest done = *amp_;
   amp_.reset();
   alarm(t_s, done.onset_blocks(), done.trigger() + " and the amplitude test");

@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "rig/monitor/amplitude_test.hpp"
+
 namespace rig::monitor {
 namespace {
 
@@ -81,7 +83,9 @@ double delay_score(const Evidence& e) {
   const double z = z_of(e, "delay");
   if (strength(z) == 0.0) return 0.0;
   // The amplitude test decides between a dead time and play when it ran.
-  if (std::isfinite(e.amplitude_z)) return e.amplitude_z < kSignificantZ ? 2.0 + strength(z) : 0.0;
+  if (std::isfinite(e.amplitude_z)) {
+    return e.amplitude_z < AmplitudeTest::kPlayZ ? 2.0 + strength(z) : 0.0;
+  }
   return strength(z) + (e.isolated == "delay" ? 1.0 : 0.0) +
          (z >= others_max(e, "delay") ? 1.0 : 0.0);
 }
@@ -91,8 +95,8 @@ constexpr double kLineQuietZ = 2.0;
 
 double backlash_score(const Evidence& e) {
   if (e.z_line >= kLineQuietZ || e.shape) return 0.0;
-  if (std::isfinite(e.amplitude_z) && e.amplitude_z >= kSignificantZ) {
-    return 2.0 + strength(e.amplitude_z) + strength(-z_of(e, "gain"));
+  if (std::isfinite(e.amplitude_z) && e.amplitude_z >= AmplitudeTest::kPlayZ) {
+    return 3.0 + strength(-z_of(e, "gain"));
   }
   if (std::isfinite(e.amplitude_z)) return 0.0;
   // Play in the rack: small-signal gain lost (the describing function of backlash), a phase

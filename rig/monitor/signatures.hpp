@@ -38,8 +38,8 @@ struct Evidence {
   // gain error (z_gain) and against an offset (z_offset); NaN when it did not run.
   double sensor_z_gain = NAN;
   double sensor_z_offset = NAN;
-  // The amplitude test (amplitude_test.hpp): the delay's growth at the lower excitation level
-  // in standard errors; NaN when it did not run.
+  // The amplitude test (amplitude_test.hpp): the gain lost at the lower excitation level beyond
+  // that at full, in standard errors; NaN when it did not run.
   double amplitude_z = NAN;
 };
 

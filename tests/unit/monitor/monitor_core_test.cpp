@@ -224,16 +224,16 @@ TEST(SensorTest, TellsAGainErrorFromAnOffset) {
   EXPECT_LT(offset.p_gain(), 0.05);
 }
 
-TEST(AmplitudeTest, AmplitudeDependentLagIsPlay) {
+TEST(AmplitudeTest, AmplitudeDependentGainLossIsPlay) {
   AmplitudeTest play("t", 1), dead("t", 1);
   for (int k = 0; k < AmplitudeTest::kBlocks; ++k) {
     const bool low = play.scale() < 1.0;
-    // Play: the lag doubles at half amplitude (b / A); dead time: the same lag at both.
-    play.add(low ? 0.008 : 0.004, low ? 0.001 : 0.0005);
-    dead.add(0.004, low ? 0.001 : 0.0005);
+    // Play: twice the gain lost at half amplitude; dead time: the same fit at both levels.
+    play.add(low ? -0.08 : -0.04, low ? 0.01 : 0.005);
+    dead.add(-0.02, low ? 0.01 : 0.005);
   }
   ASSERT_TRUE(play.done());
-  EXPECT_GT(play.z(), kSignificantZ);
+  EXPECT_GT(play.z(), AmplitudeTest::kPlayZ);
   EXPECT_LT(std::abs(dead.z()), 1.0);
 }
 
