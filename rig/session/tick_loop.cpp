@@ -242,7 +242,7 @@ void TickLoop::configure_long_run(bool keep_recording) {
   recording_ = keep_recording;
   tracing_ = false;
   abort_trips_ = false;
-  timer_.set_window(static_cast<std::size_t>(3600.0 / dt_s_));
+  timer_.set_window(static_cast<std::size_t>(600.0 / dt_s_));
 }
 
 void TickLoop::show(bool force) { view_.update(status_, force); }
