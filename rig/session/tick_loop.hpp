@@ -54,8 +54,8 @@ class TickLoop {
   TickResult supervised(Supervisor& supervisor, double request_pct);
 
   // A long run (rig monitor): no full-rate recording unless keep_recording, no trace, the
-  // last 10 to 20 minutes of cycle timings, and an operator abort ends the excitation through the phase
-  // (a normal end) instead of tripping the supervisor.
+  // last 10 to 20 minutes of cycle timings, and an operator abort ends the excitation through
+  // the phase (a normal end) instead of tripping the supervisor.
   void configure_long_run(bool keep_recording);
 
   void set_phase(Phase phase);
