@@ -49,6 +49,7 @@ SupervisorConfig supervisor_config_from(const TestConfig& c) {
   s.echo.relative_tolerance = safety_defaults::kEchoRelativeTolerance;
   s.echo.delay_ticks = std::min(63, safety_defaults::ticks_at(c.safety.echo_delay_s, rate_hz));
   s.echo.max_bad_ticks = safety_defaults::ticks_at(c.safety.echo_max_bad_s, rate_hz);
+  s.stale_ticks = safety_defaults::ticks_at(safety_defaults::kStaleTimeoutS, rate_hz);
   return s;
 }
 

@@ -24,6 +24,12 @@ inline constexpr double kEchoTolerancePct = 0.02;      // |echo - command|, % of
 inline constexpr double kEchoRelativeTolerance = 0.1;  // plus this share of |command|
 inline constexpr double kEchoDelayS = 0.05;            // the echo may show a command this old
 inline constexpr double kEchoMaxBadS = 0.05;           // a mismatch lasting longer trips
+// A governor counter may repeat this long before the sample is stale, the same 100 ms the
+// realtime links allow (drivers::LinkOptions::stale_timeout; in lockstep the link also checks
+// that the counter moved by exactly the ticks asked for). A governor, or a host, that stalls
+// for a few ticks is not a dead link: three repeats at 100 Hz (30 ms) tripped on a loaded CI
+// machine whose realtime plant stalled 36 ms.
+inline constexpr double kStaleTimeoutS = 0.1;
 
 // A time as whole ticks at rate_hz, rounded up (a tolerance in time is never shortened; the
 // 1e-9 keeps 0.05 s at 100 Hz at 5 ticks despite rounding).

@@ -152,7 +152,9 @@ struct SupervisorConfig {
   double ramp_rate_pct_per_s = safety_defaults::kRampPctPerS;  // back to baseline (trip, end)
   double dt_s = 1.0 / safety_defaults::kSampleRateHz;          // tick period
   double noise_rms_kw = 0.0;  // power noise without excitation (steady-state check)
-  int stale_ticks = 3;        // unchanged counter for this many consecutive ticks trips
+  // An unchanged counter for this many consecutive ticks trips (kStaleTimeoutS).
+  int stale_ticks =
+      safety_defaults::ticks_at(safety_defaults::kStaleTimeoutS, safety_defaults::kSampleRateHz);
   std::uint16_t trip_status_mask = drivers::kHeartbeatLost | drivers::kPlantFault;
   std::uint16_t required_status_mask = drivers::kRunning;  // a cleared bit here trips
   BackoffConfig backoff;

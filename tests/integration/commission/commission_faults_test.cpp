@@ -7,8 +7,10 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <fstream>
+#include <iterator>
 #include <regex>
 #include <thread>
 
@@ -60,6 +62,13 @@ std::string start_realtime_plant(const std::filesystem::path& dir, Background& p
   }
   ADD_FAILURE() << "plantsim did not start: " << read_text(dir / "plantsim.log");
   return {};
+}
+
+// Lines of a recording being written (the header included); 0 while it does not exist.
+std::size_t recorded_rows(const std::filesystem::path& csv) {
+  std::ifstream in(csv);
+  return static_cast<std::size_t>(
+      std::count(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>(), '\n'));
 }
 
 std::filesystem::path write_file(const std::filesystem::path& path, const std::string& text) {
@@ -194,13 +203,18 @@ TEST(CommissionFaults, LinkDropMidTestExit3AndRecordingReadable) {
                       test.string() + " --out " + (dir / "out").string(),
                   (dir / "code").string()),
       dir / "rig.log");
-  std::this_thread::sleep_for(8s);  // steady state (3 s) done, pilot under way
+  // Kill the plant once the rig has recorded 6 s (steady state done, pilot under way),
+  // whatever the rig's start-up took on this machine.
+  const auto recording = dir / "out/recording.csv";
+  for (int i = 0; i < 300 && recorded_rows(recording) < 600; ++i) {
+    std::this_thread::sleep_for(100ms);
+  }
   kill(plant.pid, SIGKILL);
   rig.wait_gone(30s);
   std::this_thread::sleep_for(500ms);
   EXPECT_EQ(read_text(dir / "code"), "3\n") << read_text(dir / "rig.log");
-  const auto rec = io::read_recording(dir / "out/recording.csv");
-  EXPECT_GT(rec.rows(), 500);
+  const auto rec = io::read_recording(recording);
+  EXPECT_GT(rec.rows(), 500) << read_text(dir / "rig.log");
 }
 
 TEST(CommissionFaults, OperatorAbortRampsDownAndKill9KeepsTheRecording) {
