@@ -30,6 +30,18 @@ void add_session_options(CLI::App& cmd, SessionArgs& a) {
   cmd.add_flag("--json", a.json, "Print report.json on stdout instead of the summary");
   cmd.add_flag("--quiet", a.quiet, "No live view");
   cmd.add_flag("--force", a.force, "Clear a non-empty --out folder first (an earlier run's files)");
+  add_live_options(cmd, a.live);
+}
+
+void add_live_options(CLI::App& cmd, LiveArgs& a) {
+  cmd.add_option("--http", a.http,
+                 "Serve a live page on HOST:PORT (or PORT on 127.0.0.1; 0: any free port); its "
+                 "Stop button needs the token printed on the console");
+  cmd.add_option("--mqtt", a.mqtt,
+                 "Publish state, estimates, alarms and the outcome to an MQTT broker: "
+                 "mqtt://HOST[:PORT]/TOPIC_PREFIX (topics PREFIX/SET_ID/..., docs/live.md)");
+  cmd.add_option("--set-id", a.set_id, "The set's id in MQTT topics and page titles")
+      ->default_str("the host name");
 }
 
 void add_commission_command(CLI::App& app) {

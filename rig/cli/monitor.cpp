@@ -79,6 +79,11 @@ int run_monitor_command(MonitorArgs& a) {
                "{} event(s); report: {}\n",
                s.outcome, s.exit_code, s.monitored_s, s.alarms, s.trips, s.events,
                (a.session.out_dir / "report.html").string());
+    publish_outcome(so, s.exit_code, s.outcome,
+                    {{"monitored_s", s.monitored_s},
+                     {"alarms", s.alarms},
+                     {"trips", s.trips},
+                     {"events", s.events}});
     return s.exit_code;
   });
 }

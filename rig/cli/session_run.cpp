@@ -99,8 +99,10 @@ int with_session(const SessionArgs& args, const std::string& command,
                  const std::function<int(const session::SessionOptions&)>& body) {
   install_abort_handler();
   io::prepare_out_dir(args.out_dir, args.force);  // before plantsim or the governor
+  LiveOutputs live(args.live, command, g_abort);
   std::unique_ptr<session::EmulatedPlant> plant;
   session::SessionOptions o;
+  o.feed = live.feed();
   o.out_dir = args.out_dir;
   o.command = command;
   o.link_uri = args.link;
@@ -119,6 +121,8 @@ int with_session(const SessionArgs& args, const std::string& command,
       plant = std::make_unique<session::EmulatedPlant>(e);
     } catch (const session::EmulatorError& ex) {
       fmt::print(stderr, "rig {}: {}\n", command, ex.what());
+      publish_outcome(o, kExitLinkFault, ex.what());
+      live.finish(kExitLinkFault);
       return kExitLinkFault;
     }
     o.link_uri = plant->link_uri();
@@ -127,7 +131,17 @@ int with_session(const SessionArgs& args, const std::string& command,
   }
   const int code = body(o);
   if (plant) plant->stop();
+  live.finish(code);
   return code;
+}
+
+void publish_outcome(const session::SessionOptions& o, int exit_code, const std::string& outcome,
+                     const nlohmann::json& extra) {
+  if (o.feed == nullptr) return;
+  nlohmann::json j = extra;
+  j["exit_code"] = exit_code;
+  j["outcome"] = outcome;
+  o.feed->publish(live::kind::kOutcome, j);
 }
 
 int run_session(const SessionArgs& args, session::TestConfig config, const std::string& command) {
@@ -140,6 +154,9 @@ int run_session(const SessionArgs& args, session::TestConfig config, const std::
     }
     // Scripts and people watching stderr see why it stopped in one line.
     if (d.exit_code != kExitOk) fmt::print(stderr, "rig {}: {}\n", command, d.outcome);
+    publish_outcome(o, d.exit_code, d.outcome,
+                    {{"model_written", d.excitation.mmfm.has_value() && d.exit_code == kExitOk},
+                     {"report", (args.out_dir / "report.html").string()}});
     return d.exit_code;
   });
 }

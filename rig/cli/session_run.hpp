@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "rig/cli/live_outputs.hpp"
 #include "rig/session/session.hpp"
 #include "rig/session/test_config.hpp"
 
@@ -31,20 +32,29 @@ struct SessionArgs {
   bool json = false;
   bool quiet = false;
   bool force = false;  // clear a non-empty --out first
+  LiveArgs live;       // --http, --mqtt, --set-id
 };
 
 // The options every session command shares (--link, --test, --out, --emulate, ...;
 // commission.cpp).
 void add_session_options(CLI::App& cmd, SessionArgs& a);
+// --http, --mqtt, --set-id (part of the session options).
+void add_live_options(CLI::App& cmd, LiveArgs& a);
 
 // Loads the test file (or the defaults), applies the emulated-plant settings, checks that a
 // link is named. Throws session::ConfigError (exit code 2).
 session::TestConfig load_config(const SessionArgs& args, const std::string& command);
 
-// Prepares --out, installs the SIGINT/SIGTERM handler, starts plantsim for --emulate, runs
-// body with the session options and stops plantsim; returns body's exit code.
+// Prepares --out, installs the SIGINT/SIGTERM handler, starts the live page and fleet feed
+// (--http, --mqtt) and plantsim for --emulate, runs body with the session options, then
+// stops plantsim and ends the live outputs; returns body's exit code. body publishes the
+// outcome on options.feed when there is one (publish_outcome).
 int with_session(const SessionArgs& args, const std::string& command,
                  const std::function<int(const session::SessionOptions&)>& body);
+
+// The command's outcome on the live feed (nothing without one).
+void publish_outcome(const session::SessionOptions& o, int exit_code, const std::string& outcome,
+                     const nlohmann::json& extra = nlohmann::json::object());
 
 // Runs the session (starting and stopping plantsim for --emulate) and returns the exit code.
 int run_session(const SessionArgs& args, session::TestConfig config, const std::string& command);

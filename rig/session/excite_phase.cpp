@@ -7,6 +7,7 @@
 #include <cmath>
 
 #include "rig/session/excitation_analysis.hpp"
+#include "rig/session/live_messages.hpp"
 #include "rig/session/online_mmfm.hpp"
 #include "rig/session/phase.hpp"
 
@@ -135,6 +136,7 @@ class ExcitePhase final : public SupervisedPhase {
 
  private:
   void show_estimate(RunContext& ctx, const BlockEstimate& e) const {
+    publish_estimate(ctx, e);
     auto& est = ctx.loop.status().estimates;
     est.clear();
     if (!e.ok) {
@@ -154,6 +156,23 @@ class ExcitePhase final : public SupervisedPhase {
     est.push_back({"order", static_cast<double>(e.order.n), 0.0});
     if (std::isfinite(e.band_db95)) est.push_back({"+-dB", e.band_db95, 0.0});
     if (std::isfinite(e.band_deg95)) est.push_back({"+-deg", e.band_deg95, 0.0});
+  }
+
+  // The live feed: every block estimate, and the Bode plot of each usable model over the
+  // swept-sine range (the page draws the sweep's points on it as they arrive).
+  void publish_estimate(RunContext& ctx, const BlockEstimate& e) const {
+    const LivePublisher& live = ctx.loop.live();
+    if (!live.on()) return;
+    const double c = record_.timing_correction_s;
+    nlohmann::json message = estimate_message(e, c);
+    message["excitation_t_s"] = e.t_s;  // the block's end in excitation time
+    message["t_s"] = ctx.loop.t_s();    // test time, like every other message
+    live.publish(live::kind::kEstimate, message);
+    const SweepSettings& range = ctx.config.sweep;
+    if (e.ok) {
+      live.publish(live::kind::kBode,
+                   bode_message(e.model, range.from_hz, range.to_hz, c, ctx.loop.t_s()));
+    }
   }
 
   std::optional<OnlineMmfm> online_;

@@ -41,10 +41,10 @@ std::string clock(double s) {
 }  // namespace
 
 std::string format_status(const LiveStatus& s) {
-  std::string line = fmt::format("{:<12} {} ETA {}  dP {:+6.2f}% {} pk {:4.2f}/{:.1f}%  u {:+5.2f}%",
-                                 s.phase, clock(s.elapsed_s), s.eta_s ? clock(*s.eta_s) : "--:--",
-                                 s.deviation_pct, deviation_bar(s.deviation_pct, s.band_pct, 21),
-                                 s.peak_deviation_pct, s.band_pct, s.bias_pct);
+  std::string line = fmt::format(
+      "{:<12} {} ETA {}  dP {:+6.2f}% {} pk {:4.2f}/{:.1f}%  u {:+5.2f}%", s.phase,
+      clock(s.elapsed_s), s.eta_s ? clock(*s.eta_s) : "--:--", s.deviation_pct,
+      deviation_bar(s.deviation_pct, s.band_pct, 21), s.peak_deviation_pct, s.band_pct, s.bias_pct);
   for (const auto& e : s.estimates) {
     line += e.std_error > 0.0 ? fmt::format("  {} {:.4g}+-{:.2g}", e.name, e.value, e.std_error)
                               : fmt::format("  {} {:.4g}", e.name, e.value);

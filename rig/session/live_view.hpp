@@ -19,15 +19,15 @@ struct LiveEstimate {
 };
 
 struct LiveStatus {
-  std::string phase;                   // "steady", "pilot", "excite", "sweep 1.2 Hz", ...
-  double elapsed_s = 0.0;              // test time
-  std::optional<double> eta_s;         // remaining, when known
-  double deviation_pct = 0.0;          // (P - P0) / P0 * 100 of the latest sample
-  double peak_deviation_pct = 0.0;     // largest |deviation| in the current phase
+  std::string phase;                // "steady", "pilot", "excite", "sweep 1.2 Hz", ...
+  double elapsed_s = 0.0;           // test time
+  std::optional<double> eta_s;      // remaining, when known
+  double deviation_pct = 0.0;       // (P - P0) / P0 * 100 of the latest sample
+  double peak_deviation_pct = 0.0;  // largest |deviation| in the current phase
   double band_pct = 3.0;
   double bias_pct = 0.0;
   std::vector<LiveEstimate> estimates;
-  std::vector<std::string> flags;      // data-quality flags ("stale", "backoff", ...)
+  std::vector<std::string> flags;  // data-quality flags ("stale", "backoff", ...)
 };
 
 // "[-----|--#--]": the band from -band to +band, '|' at zero, '#' at the deviation ('<' or

@@ -56,6 +56,14 @@ class LoopTimer {
   void set_window(std::size_t cycles) { window_ = cycles; }
 
   LoopTimingSummary summary() const;
+  // The last n cycles only (cheap enough for the loop's thread to call every few seconds):
+  // lateness (realtime) or exchange time (lockstep) p50, p99 and max, in ms.
+  struct Recent {
+    double p50_ms = 0.0, p99_ms = 0.0, max_ms = 0.0;
+  };
+  Recent recent(std::size_t n) const;
+  std::size_t cycles() const { return t_s_.size() + dropped_; }
+  std::size_t overruns() const { return overruns_; }
 
  private:
   bool realtime_;

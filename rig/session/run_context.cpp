@@ -22,7 +22,7 @@ int exit_code_for(TripCause cause) {
 
 RunContext::RunContext(SessionData& d, drivers::GovernorLink& l, io::RecordingWriter& recorder,
                        LiveView& v, const SessionOptions& options)
-    : data(d), config(d.config), link(l), view(v), loop(l, d.config, recorder, v, options.abort) {}
+    : data(d), config(d.config), link(l), view(v), loop(l, d.config, recorder, v, options.abort, options.feed) {}
 
 double RunContext::noise_kw() const {
   return data.steady ? data.steady->noise_pct / 100.0 * p0_kw : 0.0;

@@ -22,6 +22,7 @@
 #include "rig/fra/frf.hpp"
 #include "rig/ident/mmfm.hpp"
 #include "rig/io/exit_code.hpp"
+#include "rig/live/feed.hpp"
 #include "rig/session/online_mmfm.hpp"
 #include "rig/session/pilot.hpp"
 #include "rig/session/shaped_excitation.hpp"
@@ -39,7 +40,8 @@ struct SessionOptions {
   std::optional<std::uint64_t> plant_seed;
   std::string command = "commission";        // "commission" or "sweep"
   std::FILE* live_out = stderr;              // live view (nullptr: silent)
-  const std::atomic<bool>* abort = nullptr;  // set by the SIGINT handler
+  const std::atomic<bool>* abort = nullptr;  // set by the SIGINT handler (or the live page)
+  live::Feed* feed = nullptr;                // live page and fleet feed (nullptr: off)
 };
 
 // The ramp-down at the end of a test or after a trip (DESIGN.md section 8, layer 3).

@@ -8,6 +8,7 @@
 
 #include "rig/fra/stepped_sine.hpp"
 #include "rig/ident/identify.hpp"
+#include "rig/session/live_messages.hpp"
 #include "rig/session/phase.hpp"
 
 namespace rig::session {
@@ -144,6 +145,9 @@ class SweepPhase final : public SupervisedPhase {
     if (k < soft_ || analyser_->done()) return;
     if (auto point = analyser_->push(r.out.excitation_pct, r.sample->power_kw - ctx.p0_kw)) {
       if (!point->good) ctx.loop.status().flags = {"sweep point below quality"};
+      ctx.loop.live().publish(
+          live::kind::kSweepPoint,
+          sweep_point_message(*point, ctx.timing_correction_s(), ctx.loop.t_s()));
     }
     ctx.loop.status().eta_s = plan_.duration_s() - static_cast<double>(k - soft_) * ctx.dt_s();
   }

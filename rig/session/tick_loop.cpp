@@ -34,7 +34,8 @@ const std::vector<std::string>& recording_columns() {
 }
 
 TickLoop::TickLoop(drivers::GovernorLink& link, const TestConfig& config,
-                   io::RecordingWriter& recorder, LiveView& view, const std::atomic<bool>* abort)
+                   io::RecordingWriter& recorder, LiveView& view, const std::atomic<bool>* abort,
+                   live::Feed* feed)
     : link_(link),
       config_(config),
       recorder_(recorder),
@@ -42,7 +43,8 @@ TickLoop::TickLoop(drivers::GovernorLink& link, const TestConfig& config,
       abort_(abort),
       dt_s_(1.0 / config.link.sample_rate_hz),
       start_(std::chrono::steady_clock::now()),
-      timer_(config.link.lockstep_ticks == 0, 1.0 / config.link.sample_rate_hz) {
+      timer_(config.link.lockstep_ticks == 0, 1.0 / config.link.sample_rate_hz),
+      live_(feed, config.link.sample_rate_hz) {
   status_.band_pct = config.safety.band_pct;
 }
 
@@ -73,6 +75,7 @@ void TickLoop::set_phase(Phase phase) {
 
 void TickLoop::event(const std::string& kind, const std::string& text) {
   events_.push_back({t_s(), kind, text});
+  live_.event(t_s(), kind, text);
   if (kind != "phase") view_.message(fmt::format("[{:8.2f} s] {}: {}", t_s(), kind, text));
 }
 
@@ -169,7 +172,7 @@ TickResult TickLoop::prime() {
 TickResult TickLoop::supervised(Supervisor& sup, double request_pct) {
   pace();
   if (abort_trips_ && abort_requested() && !sup.tripped()) {
-    sup.trip(TripCause::kExternal, "operator abort (SIGINT)");
+    sup.trip(TripCause::kExternal, "operator abort (Ctrl-C, SIGTERM or the live page's Stop)");
     event("abort", "operator abort: ramping the bias back to baseline");
   }
   TickResult r;
@@ -194,6 +197,7 @@ TickResult TickLoop::supervised(Supervisor& sup, double request_pct) {
     ++failures_;
     if (!read) last_link_error_ = read.error().message();
   }
+  supervisor_state_ = r.out.state;
   if (read) {
     r.sample = read.value();
     record(read.value(), r.out.excitation_pct, request_pct);
@@ -235,6 +239,10 @@ void TickLoop::record(const drivers::Sample& s, double u_pct, double request_pct
     trace_.deviation_pct.push_back(deviation_pct);
     trace_.u_pct.push_back(u_pct);
   }
+  if (finite) {
+    live_.sample(ticks_, t_s(), deviation_pct, u_pct, static_cast<int>(phase_),
+                 supervisor_state_ == SupervisorState::kBackingOff);
+  }
   show();
 }
 
@@ -245,6 +253,10 @@ void TickLoop::configure_long_run(bool keep_recording) {
   timer_.set_window(static_cast<std::size_t>(600.0 / dt_s_));
 }
 
-void TickLoop::show(bool force) { view_.update(status_, force); }
+void TickLoop::show(bool force) {
+  view_.update(status_, force);
+  live_.state(status_, supervisor_state_, p0_kw_, force);
+  live_.timing(timer_, t_s(), force);
+}
 
 }  // namespace rig::session

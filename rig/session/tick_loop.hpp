@@ -11,6 +11,8 @@
 
 #include "drivers/governor_link.hpp"
 #include "rig/io/recording_writer.hpp"
+#include "rig/live/feed.hpp"
+#include "rig/session/live_publish.hpp"
 #include "rig/session/live_view.hpp"
 #include "rig/session/loop_timing.hpp"
 #include "rig/session/supervisor.hpp"
@@ -40,7 +42,7 @@ struct TickResult {
 class TickLoop {
  public:
   TickLoop(drivers::GovernorLink& link, const TestConfig& config, io::RecordingWriter& recorder,
-           LiveView& view, const std::atomic<bool>* abort);
+           LiveView& view, const std::atomic<bool>* abort, live::Feed* feed = nullptr);
   ~TickLoop();  // back to normal scheduling when the realtime loop raised it
   TickLoop(const TickLoop&) = delete;
   TickLoop& operator=(const TickLoop&) = delete;
@@ -73,7 +75,10 @@ class TickLoop {
   // supervised tick turns it into a kRigFailure trip; nothing is thrown across the tick.
   const std::string& rig_failure() const { return rig_failure_; }
   LiveStatus& status() { return status_; }
+  // Refreshes the terminal line and, with a live feed, publishes the status and timing.
   void show(bool force = false);
+  // The live feed (estimates, sweep points, alarms are published by the phases).
+  const LivePublisher& live() const { return live_; }
   // Power deviation (P - P0) / P0 % trace, decimated to ~10 Hz, for the report.
   struct Trace {
     std::vector<double> t_s, deviation_pct, u_pct;
@@ -108,6 +113,8 @@ class TickLoop {
   LoopTimer timer_;
   bool fifo_ = false;
   LiveStatus status_;
+  LivePublisher live_;
+  SupervisorState supervisor_state_ = SupervisorState::kIdle;
   Trace trace_;
   double p0_kw_ = 0.0;
   double max_dev_pct_ = 0.0;
