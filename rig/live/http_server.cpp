@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 #include <httplib.h>
+#include <sys/socket.h>
 
 #include <atomic>
 #include <charconv>
@@ -155,6 +156,12 @@ LiveServer::LiveServer(const Feed& feed, const HttpAddress& address, std::string
                                    std::move(on_stop))) {
   impl_->routes();
   impl_->server.set_write_timeout(kWriteTimeoutS, 0);
+  // SO_REUSEADDR only: cpp-httplib's default also sets SO_REUSEPORT, which would let a second
+  // rig bind the same port and take half of the first one's visitors.
+  impl_->server.set_socket_options([](socket_t sock) {
+    int yes = 1;
+    ::setsockopt(sock, SOL_SOCKET, SO_REUSEADDR, &yes, sizeof yes);
+  });
   int port = address.port;
   if (port == 0) {
     port = impl_->server.bind_to_any_port(address.host);
@@ -169,6 +176,11 @@ LiveServer::LiveServer(const Feed& feed, const HttpAddress& address, std::string
   }
   url_ = fmt::format("http://{}:{}/", address.host, port);
   impl_->thread = std::thread([this] { impl_->server.listen_after_bind(); });
+  // Serving before returning: cpp-httplib's stop() does nothing to a server whose thread has
+  // not reached its accept loop yet, which would then never end (and stop() never join).
+  for (int i = 0; i < 2000 && !impl_->server.is_running(); ++i) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  }
 }
 
 void LiveServer::stop() {
