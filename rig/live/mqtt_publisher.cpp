@@ -5,8 +5,10 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cstdint>
 #include <stdexcept>
 #include <string_view>
+#include <vector>
 
 namespace rig::live {
 namespace {

@@ -33,6 +33,7 @@ sockaddr_in loopback(int port) {
 
 bool accepts(int port) {
   const int fd = socket(AF_INET, SOCK_STREAM, 0);
+  if (fd < 0) return false;
   const sockaddr_in addr = loopback(port);
   const bool ok = connect(fd, reinterpret_cast<const sockaddr*>(&addr), sizeof addr) == 0;
   close(fd);
@@ -64,6 +65,7 @@ std::string find_program(const std::string& name) {
 
 int free_port() {
   const int fd = socket(AF_INET, SOCK_STREAM, 0);
+  if (fd < 0) throw std::runtime_error("cannot open a socket");
   sockaddr_in addr = loopback(0);
   socklen_t len = sizeof addr;
   if (bind(fd, reinterpret_cast<sockaddr*>(&addr), sizeof addr) != 0 ||
