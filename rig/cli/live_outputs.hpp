@@ -12,7 +12,8 @@
 
 namespace rig::live {
 class LiveServer;
-}
+class MqttPublisher;
+}  // namespace rig::live
 
 namespace rig::cli {
 
@@ -41,6 +42,7 @@ class LiveOutputs {
   bool on_ = false;
   live::Feed feed_;
   std::unique_ptr<live::LiveServer> server_;
+  std::unique_ptr<live::MqttPublisher> mqtt_;
   bool finished_ = false;
 };
 
