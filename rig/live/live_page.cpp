@@ -27,7 +27,7 @@ h1{font-size:20px;margin:0 0 8px}
 .kv span{font-size:16px;font-variant-numeric:tabular-nums}
 #banner{padding:8px;border-radius:4px;margin:8px 0;display:none}
 .ok{background:#e3f4e3;border:1px solid #7b7}.bad{background:#fbe3e3;border:1px solid #c77}
-.grid{display:grid;grid-template-columns:repeat(auto-fit,minmax(460px,1fr));gap:12px}
+.grid{display:grid;grid-template-columns:repeat(auto-fill,minmax(460px,1fr));gap:12px}
 .card{background:#fff;border:1px solid #ddd;border-radius:4px;padding:8px}
 .card h2{font-size:14px;margin:0 0 4px}
 #events{max-height:180px;overflow:auto;font:12px monospace;white-space:pre-wrap}
@@ -37,7 +37,7 @@ h1{font-size:20px;margin:0 0 8px}
 // The page's script: state from the stream, charts redrawn when something changed.
 constexpr const char* kScript = R"js(
 const S={start:null,state:null,t:[],dev:[],u:[],bo:[],est:[],bode:null,sweep:[],ev:[],
-  timing:null,outcome:null,trend:[]};
+  timing:null,outcome:null};
 let dirty=true;const C={};
 const $=id=>document.getElementById(id);
 window.onerror=(m)=>{document.body.dataset.jsError=String(m);};
@@ -91,6 +91,15 @@ function bodeData(){const f=new Set();const b=S.bode;if(b)b.f_hz.forEach(x=>f.ad
     sp.set(p.f_hz,nearestPhase(p.phase_deg,ref));});
   const g=(m,x)=>m.has(x)?m.get(x):null;
   return[[xs,xs.map(x=>g(mi,x)),xs.map(x=>g(sm,x))],[xs,xs.map(x=>g(pi,x)),xs.map(x=>g(sp,x))]];}
+// rig monitor: one chart per tracked value on the history's time axis, with its thresholds.
+const TR={};
+function trendSeries(name){if(!TR[name]){TR[name]={x:[],v:[],lo:[],hi:[]};
+  const card=document.createElement('div');card.className='card';
+  card.innerHTML='<div id="t_'+name+'"></div>';$('trends').appendChild(card);
+  $('trendbox').style.display='block';
+  chart('t_'+name,name+' (dashed: alarm thresholds)',[{label:name,stroke:'#1f77b4'},
+    {label:'low',stroke:'#c33',dash:[6,4]},{label:'high',stroke:'#c33',dash:[6,4]}],
+    {xl:'history time, h',yl:name});}return TR[name];}
 function text(id,v){$(id).textContent=v;}
 function redraw(){if(!dirty)return;dirty=false;const s=S.state;
   if(s){text('phase',s.phase);text('t',fmt(s.t_s,1));text('eta',fmt(s.eta_s,0));
@@ -107,6 +116,8 @@ function redraw(){if(!dirty)return;dirty=false;const s=S.state;
     xs.push(m.t_s);v.push(x);hi.push(se!==null?x+2*se:null);lo.push(se!==null?x-2*se:null);}
     C['c_'+p[0]].setData([xs,v,hi,lo]);}
   const bd=bodeData();C.c_mag.setData(bd[0]);C.c_ph.setData(bd[1]);
+  for(const n in TR){const t=TR[n];C['t_'+n].setData([t.x,t.v,t.lo,t.hi]);}
+  document.body.dataset.trends=Object.keys(TR).length;
   $('events').textContent=S.ev.map(e=>'['+fmt(e.t_s,2).padStart(9)+' s] '+e.kind+': '+e.text).join('\n');
   const d=document.body.dataset;d.samples=S.t.length;d.lastT=S.t.length?S.t[S.t.length-1]:'';
   d.phase=s?s.phase:'';d.estimates=S.est.length;d.sweepPoints=S.sweep.length;d.events=S.ev.length;
@@ -117,12 +128,19 @@ const es=new EventSource('events');document.body.dataset.stream='connecting';
 es.onopen=()=>{document.body.dataset.stream='open';};
 es.onerror=()=>{document.body.dataset.stream=S.outcome?'closed':'reconnecting';};
 const on=(k,f)=>es.addEventListener(k,e=>{f(JSON.parse(e.data));dirty=true;});
-on('start',m=>{S.start=m;});on('state',m=>{S.state=m;});on('timing',m=>{S.timing=m;});
+on('start',m=>{S.start=m;if(m.command==='monitor')document.querySelectorAll('.commission')
+  .forEach(e=>{e.style.display='none';});});on('state',m=>{S.state=m;});on('timing',m=>{S.timing=m;});
 on('sample',m=>{S.t.push(m.t_s);S.dev.push(m.deviation_pct);S.u.push(m.u_pct);
   S.bo.push(m.backoff?m.deviation_pct:null);});
-on('event',m=>{S.ev.push(m);});on('alarm',m=>{S.ev.push({t_s:m.t_s,kind:'alarm',text:m.cause||''});});
+on('event',m=>{S.ev.push(m);});
+on('alarm',m=>{S.ev.push({t_s:m.t_s,kind:m.earlier_run?'alarm (earlier run)':'alarm',
+  text:(m.cause||'')+(m.check?': check '+m.check:'')});});
+on('trend_history',m=>{const s=trendSeries(m.name);m.history_s.forEach((x,i)=>{
+  s.x.push(x/3600);s.v.push(m.value[i]);s.lo.push(m.lo[i]);s.hi.push(m.hi[i]);});});
+on('trend',m=>{for(const v of m.values){const s=trendSeries(v.name);s.x.push(m.history_s/3600);
+  s.v.push(v.value);s.lo.push(v.lo);s.hi.push(v.hi);}});
 on('estimate',m=>{if(m.ok)S.est.push(m);});on('bode',m=>{S.bode=m;});
-on('sweep_point',m=>{S.sweep.push(m);});on('trend',m=>{S.trend.push(m);});
+on('sweep_point',m=>{S.sweep.push(m);});
 on('outcome',m=>{S.outcome=m;es.close();document.body.dataset.stream='closed';});
 setInterval(redraw,100);
 window.addEventListener('resize',()=>{for(const k in C){const el=$(k);
@@ -142,10 +160,12 @@ constexpr const char* kBody = R"html(
 <button id="stop">Stop</button><span id="stopmsg"></span></div>
 <div class="grid">
 <div class="card"><div id="c_dev"></div></div><div class="card"><div id="c_u"></div></div>
-<div class="card"><div id="c_mag"></div></div><div class="card"><div id="c_ph"></div></div>
-<div class="card"><div id="c_gain"></div></div><div class="card"><div id="c_fn_hz"></div></div>
-<div class="card"><div id="c_zeta"></div></div><div class="card"><div id="c_delay_s"></div></div>
+<div class="card commission"><div id="c_mag"></div></div><div class="card commission"><div id="c_ph"></div></div>
+<div class="card commission"><div id="c_gain"></div></div><div class="card commission"><div id="c_fn_hz"></div></div>
+<div class="card commission"><div id="c_zeta"></div></div><div class="card commission"><div id="c_delay_s"></div></div>
 </div>
+<div id="trendbox" style="display:none"><h2>Tracked parameters (rig monitor)</h2>
+<div class="grid" id="trends"></div></div>
 <div class="card"><h2>Events</h2><div id="events"></div></div>
 )html";
 

@@ -21,15 +21,20 @@ struct MonitorRun {
   long run_id = 0;
   const MonitorOptions& options;
   MonitorSummary& summary;
-  double sigma_pct = 0.0;   // planned excitation std, % of rated
-  std::uint64_t seed = 1;   // of the excitation (chunks continue it)
-  long chunk = 0;           // excitation chunks generated so far
-  std::string stop_reason;  // set when the run ends normally (operator, duration)
+  double sigma_pct = 0.0;         // planned excitation std, % of rated
+  std::uint64_t seed = 1;         // of the excitation (chunks continue it)
+  long chunk = 0;                 // excitation chunks generated so far
+  std::string stop_reason;        // set when the run ends normally (operator, duration)
+  double history_offset_s = 0.0;  // this run's t = 0 on the history's time axis
 
   // The core's block report and events into the history, the live view and stdout.
   void publish(RunContext& ctx, const monitor::BlockReport* report);
 };
 
 std::unique_ptr<SessionPhase> make_monitor_phase(MonitorRun& run);
+
+// Earlier runs' trends (decimated) and alarms from the history, for a live page opened on
+// this run (nothing without a live feed).
+void publish_history(const LivePublisher& live, const monitor::History& history, long run_id);
 
 }  // namespace rig::session

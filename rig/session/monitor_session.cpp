@@ -233,6 +233,10 @@ MonitorSummary run_monitor(const TestConfig& config, const SessionOptions& optio
   monitor::Monitor core(pairs_model, core_settings(config, mo, 0.0));
   MonitorRun run{core, history, run_id, mo, summary};
   run.seed = config.excitation.seed;
+  for (const auto& r : history.runs()) {
+    if (r.id == run_id) run.history_offset_s = r.offset_s;
+  }
+  publish_history(ctx.loop.live(), history, run_id);
   monitor_run(ctx, run, pairs_model);
   make_deactivate_phase()->run(ctx);
   view.finish();

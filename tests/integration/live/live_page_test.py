@@ -162,6 +162,60 @@ class LivePageTest(unittest.TestCase):
         self.assertAlmostEqual(float(last["bias_echo"]), 0.0, places=3)
 
 
+class MonitorPageTest(unittest.TestCase):
+    """rig monitor --http: the page shows this run's trends with the earlier runs' from the
+    history, and its Stop is the normal end of a monitor (exit 0, report written)."""
+
+    def test_monitor_page_shows_the_history_and_stops_normally(self):
+        WORK.mkdir(parents=True, exist_ok=True)
+        base = WORK / "baseline"
+        subprocess.run([RIG, "commission", "--emulate", "--seed", "1", "--quiet", "--force",
+                        "--out", str(base)], check=True, capture_output=True, timeout=600)
+        history = WORK / "history.sqlite"
+        history.unlink(missing_ok=True)
+        common = [RIG, "monitor", "--emulate", "--seed", "5", "--baseline",
+                  str(base / "model.json"), "--history", str(history), "--learn", "300",
+                  "--quiet", "--force"]
+        subprocess.run(common + ["--duration", "700", "--out", str(WORK / "monitor-1")],
+                       check=True, capture_output=True, timeout=600)
+        log = WORK / "monitor-2.log"
+        with open(log, "w") as f:
+            rig = subprocess.Popen(common + ["--duration", "20000", "--out",
+                                             str(WORK / "monitor-2"), "--http", "0"],
+                                   stdout=subprocess.DEVNULL, stderr=f)
+            try:
+                m = wait_for_line(log, r"live page (http://127\.0\.0\.1:\d+/) \(stop token "
+                                       r"([0-9a-f]{32})\)", 30)
+                b = Chromium()
+                try:
+                    b.navigate(m.group(1))
+                    trends, _ = b.wait_for("+document.body.dataset.trends >= 4 && "
+                                           "TR.gain_db && TR.gain_db.x.length > 60 && "
+                                           "document.body.dataset.trends", 60)
+                    self.assertTrue(trends, "no trends on the monitor's page: " + str(b.evaluate(
+                        "JSON.stringify([document.body.dataset, Object.keys(TR).map("
+                        "k => [k, TR[k].x.length])])")))
+                    # The earlier run (history time 0 to 700 s) and this one (after it).
+                    first_h, last_h = b.evaluate("[Math.min(...TR.gain_db.x), "
+                                                 "Math.max(...TR.gain_db.x)]")
+                    self.assertLess(first_h, 700 / 3600)
+                    self.assertGreater(last_h, 700 / 3600)
+                    self.assertEqual(b.evaluate("document.body.dataset.phase"), "monitor")
+                    b.screenshot(str(WORK / "monitor_page.png"))
+                    b.evaluate(f"document.getElementById('token').value='{m.group(2)}';"
+                               "document.getElementById('stop').click(); 0")
+                    outcome, _ = b.wait_for("document.body.dataset.outcome", 60)
+                    self.assertEqual(outcome, "0")
+                finally:
+                    b.close()
+                self.assertEqual(rig.wait(60), 0, log.read_text())
+            finally:
+                if rig.poll() is None:
+                    rig.kill()
+                    rig.wait()
+        self.assertTrue((WORK / "monitor-2" / "report.html").exists())
+
+
 if __name__ == "__main__":
     print(f"work directory: {WORK}")
     unittest.main(verbosity=2)
