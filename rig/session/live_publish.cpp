@@ -61,14 +61,23 @@ void LivePublisher::timing(const LoopTimer& timer, double t_s, bool force) {
   if (feed_ == nullptr || !due(last_timing_, kTimingIntervalS, force)) return;
   // The last ~10 s of cycles at 100 Hz: the figure a person watching wants, cheap to compute.
   constexpr std::size_t kRecentCycles = 1000;
+  // Each cycle's own figure since the previous message, in whole microseconds, so that a
+  // reader can pool any stretch of the run exactly (scripts/bench live); bounded for a loop
+  // that stalled for long.
+  constexpr std::size_t kMaxListed = 2000;
   const LoopTimer::Recent r = timer.recent(kRecentCycles);
+  const std::size_t fresh = std::min(kMaxListed, timer.cycles() - timed_cycles_);
+  timed_cycles_ = timer.cycles();
+  nlohmann::json cycles_us = nlohmann::json::array();
+  for (float ms : timer.last(fresh)) cycles_us.push_back(std::lround(1e3 * ms));
   feed_->publish(live::kind::kTiming, {{"t_s", t_s},
                                        {"mode", timer.realtime() ? "realtime" : "lockstep"},
                                        {"p50_ms", r.p50_ms},
                                        {"p99_ms", r.p99_ms},
                                        {"max_ms", r.max_ms},
                                        {"cycles", timer.cycles()},
-                                       {"overruns", timer.overruns()}});
+                                       {"overruns", timer.overruns()},
+                                       {"cycles_us", cycles_us}});
 }
 
 }  // namespace rig::session

@@ -39,6 +39,7 @@ class LivePublisher {
   live::Feed* feed_;
   std::uint64_t every_ticks_;
   std::chrono::steady_clock::time_point last_state_{}, last_timing_{};
+  std::size_t timed_cycles_ = 0;  // cycles covered by the timing messages so far
 };
 
 }  // namespace rig::session

@@ -91,11 +91,15 @@ void LoopTimer::exchange(double wall_s) {
   exchange_ms_.push_back(static_cast<float>(1e3 * wall_s));
 }
 
-LoopTimer::Recent LoopTimer::recent(std::size_t n) const {
+std::vector<float> LoopTimer::last(std::size_t n) const {
   const std::vector<float>& v = realtime_ ? lateness_ms_ : exchange_ms_;
   const std::size_t k = std::min(n, v.size());
-  const std::vector<float> last(v.end() - static_cast<std::ptrdiff_t>(k), v.end());
-  return {quantile_ms(last, 0.5), quantile_ms(last, 0.99), quantile_ms(last, 1.0)};
+  return {v.end() - static_cast<std::ptrdiff_t>(k), v.end()};
+}
+
+LoopTimer::Recent LoopTimer::recent(std::size_t n) const {
+  const std::vector<float> v = last(n);
+  return {quantile_ms(v, 0.5), quantile_ms(v, 0.99), quantile_ms(v, 1.0)};
 }
 
 LoopTimingSummary LoopTimer::summary() const {

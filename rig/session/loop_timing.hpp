@@ -62,6 +62,8 @@ class LoopTimer {
     double p50_ms = 0.0, p99_ms = 0.0, max_ms = 0.0;
   };
   Recent recent(std::size_t n) const;
+  // The last n cycles' lateness (realtime) or exchange time (lockstep), ms, oldest first.
+  std::vector<float> last(std::size_t n) const;
   std::size_t cycles() const { return t_s_.size() + dropped_; }
   std::size_t overruns() const { return overruns_; }
 
