@@ -15,8 +15,10 @@ void Feed::publish(std::string_view kind, const nlohmann::json& body) {
     m->seq = ++seq_;
     MessagePtr stored = std::move(m);
     latest_[stored->kind] = stored;
-    messages_.push_back(std::move(stored));
-    if (messages_.size() > kMaxMessages) thin_locked();
+    if (!superseded_by_next(stored->kind)) {
+      messages_.push_back(std::move(stored));
+      if (messages_.size() > kMaxMessages) thin_locked();
+    }
   }
   cv_.notify_all();
 }
@@ -47,13 +49,29 @@ void Feed::close() {
   cv_.notify_all();
 }
 
+bool Feed::superseded_by_next(std::string_view k) {
+  return k == kind::kState || k == kind::kTiming || k == kind::kBode;
+}
+
 std::vector<MessagePtr> Feed::since(std::uint64_t after, std::size_t max_count) const {
   const std::lock_guard lock(mutex_);
   auto first = std::upper_bound(messages_.begin(), messages_.end(), after,
                                 [](std::uint64_t s, const MessagePtr& m) { return s < m->seq; });
-  const auto n =
-      std::min<std::size_t>(max_count, static_cast<std::size_t>(messages_.end() - first));
-  return {first, first + static_cast<std::ptrdiff_t>(n)};
+  const auto left = static_cast<std::size_t>(messages_.end() - first);
+  const std::size_t n = std::min(max_count, left);
+  std::vector<MessagePtr> out(first, first + static_cast<std::ptrdiff_t>(n));
+  // The latest of each superseded kind, in order, but not beyond a batch cut short (the
+  // reader's next `after` must not skip the history it has not read yet).
+  const std::uint64_t limit = n < left && !out.empty() ? out.back()->seq : seq_;
+  for (const char* k : {kind::kState, kind::kTiming, kind::kBode}) {
+    const auto it = latest_.find(k);
+    if (it != latest_.end() && it->second->seq > after && it->second->seq <= limit) {
+      out.push_back(it->second);
+    }
+  }
+  std::sort(out.begin(), out.end(),
+            [](const MessagePtr& a, const MessagePtr& b) { return a->seq < b->seq; });
+  return out;
 }
 
 bool Feed::wait(std::uint64_t after, std::chrono::milliseconds timeout) const {

@@ -6,10 +6,11 @@
 // block a tick. Readers take shared pointers to the stored messages in batches and write them
 // out after releasing the lock.
 //
-// History: every message is kept so that a page opened mid-test can draw the test so far,
-// up to kMaxMessages; beyond that the older half's "sample" messages are thinned to every
-// other one (a monitor running for days keeps its recent past at full resolution and the
-// rest at a resolution that halves with age) and, past that, the oldest messages go.
+// History: so that a page opened mid-test can draw the test so far, every message is kept,
+// except the kinds a newer message supersedes (state, timing, bode: only the latest of each is
+// kept), up to kMaxMessages; beyond that the older half's "sample" messages are thinned to
+// every other one (a monitor running for days keeps its recent past at full resolution and
+// the rest at a resolution that halves with age) and, past that, the oldest messages go.
 #pragma once
 
 #include <atomic>
@@ -53,7 +54,9 @@ using MessagePtr = std::shared_ptr<const Message>;
 
 class Feed {
  public:
-  static constexpr std::size_t kMaxMessages = 200000;
+  // About 2.5 h of samples at 10 Hz with the rest, 9 MB: what a browser takes in well
+  // under a second on a page opened late.
+  static constexpr std::size_t kMaxMessages = 100000;
   static constexpr std::size_t kMaxBatch = 2000;  // messages copied per lock
 
   // Loop side. Cheap: one dump of `body` and an append.
@@ -61,7 +64,11 @@ class Feed {
   // No more messages (the command is ending): wakes every waiting reader.
   void close();
 
-  // Reader side. Messages with seq > after, oldest first, at most max_count.
+  // Kinds of which only the latest message matters (kept out of the history).
+  static bool superseded_by_next(std::string_view kind);
+
+  // Reader side. Messages with seq > after, oldest first, at most max_count (of a
+  // superseded kind only the latest, when it is newer than `after`).
   std::vector<MessagePtr> since(std::uint64_t after, std::size_t max_count = kMaxBatch) const;
   // Waits until a message with seq > after exists, the feed closes, or timeout passes;
   // true when there is something new to read.

@@ -5,10 +5,15 @@ it at 10 Hz), WINDOW seconds each, closed first; the loop's lateness per cycle c
 feed's own timing messages (every cycle's lateness in microseconds), pooled per window.
 
   live_bench.py --rig build/bin/rig [--window 60] [--pairs 2] [--seed 2] [--out DIR]
+                [--monitor-hours H --baseline MODEL.json]
 
 Printed: per window, cycles, lateness p50/p99/max; then p99 open minus p99 closed (the
 issue's figure: within 0.1 ms) and the same as a ratio. The first 5 s after opening or closing
 are left out of both (Chromium starting up or exiting is not the page's steady cost).
+--monitor-hours H (instead): `rig monitor --emulate` (lockstep) with --http until H hours of
+plant time have passed, then a page is opened: printed, the time until it shows the history
+so far (the issue's figure: within 1 s), how many samples it holds and over what span (the
+feed thins old samples), and the trend points per tracked value.
 Needs Debian's chromium and python3-websocket (run with /usr/bin/python3).
 """
 import argparse, json, os, re, shutil, subprocess, sys, tempfile, threading, time
@@ -56,6 +61,54 @@ def quantile(values, q):
     return v[min(len(v) - 1, max(0, int(-(-q * len(v) // 1)) - 1))] if v else float("nan")
 
 
+def state(url):
+    with urllib.request.urlopen(url + "state", timeout=10) as r:
+        return json.load(r)
+
+
+def serve(cmd, work):
+    log = open(work / "rig.log", "w")
+    rig = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=log)
+    for _ in range(600):
+        m = re.search(r"live page (http://\S+/) \(stop token (\w+)\)",
+                      (work / "rig.log").read_text())
+        if m:
+            return rig, log, m.group(1), m.group(2)
+        time.sleep(0.1)
+    sys.exit("rig did not serve a page: " + (work / "rig.log").read_text())
+
+
+def monitor_history(a, work):
+    """A page opened on a monitor that has run for --monitor-hours of plant time."""
+    out = work / "monitor"
+    shutil.rmtree(out, ignore_errors=True)
+    rig, log, url, token = serve(
+        [a.rig, "monitor", "--emulate", "--seed", str(a.seed), "--baseline", a.baseline,
+         "--quiet", "--duration", str(a.monitor_hours * 3600 * 2), "--out", str(out),
+         "--http", "0"], work)
+    target_s = a.monitor_hours * 3600
+    t0 = time.monotonic()
+    while (s := state(url)["state"]) is None or s["t_s"] < target_s:
+        time.sleep(2)
+    print(f"monitor at {s['t_s'] / 3600:.2f} h of plant time after "
+          f"{time.monotonic() - t0:.0f} s of wall time; opening the page", flush=True)
+    b = Chromium()
+    b.navigate(url)
+    t_now = state(url)["state"]["t_s"]
+    shown, waited = b.wait_for(f"+document.body.dataset.lastT >= {t_now - 60} && "
+                               "document.body.dataset.samples", 60)
+    span = b.evaluate("[S.t[0], S.t[S.t.length - 1], Object.keys(TR).length, "
+                      "TR.gain_db ? TR.gain_db.x.length : 0]")
+    print(f"page showed the history after {waited:.2f} s (target within 1 s): {shown} samples "
+          f"over {span[0] / 3600:.2f}-{span[1] / 3600:.2f} h, {span[2]} tracked values, "
+          f"{span[3]} gain points")
+    b.close()
+    urllib.request.urlopen(urllib.request.Request(url + "stop", data=b"", method="POST",
+                                                  headers={"X-Rig-Token": token}), timeout=10)
+    print(f"monitor exit {rig.wait(300)}")
+    log.close()
+
+
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--rig", default="build/bin/rig")
@@ -63,9 +116,15 @@ def main():
     ap.add_argument("--pairs", type=int, default=2)
     ap.add_argument("--seed", type=int, default=2)
     ap.add_argument("--out", default=None)
+    ap.add_argument("--monitor-hours", type=float, default=0.0)
+    ap.add_argument("--baseline", default=None)
     a = ap.parse_args()
     work = Path(a.out or tempfile.mkdtemp(prefix="live-bench-"))
     work.mkdir(parents=True, exist_ok=True)
+    if a.monitor_hours > 0:
+        if not a.baseline:
+            sys.exit("--monitor-hours needs --baseline MODEL.json")
+        return monitor_history(a, work)
     test = work / "bench.toml"
     total = 2 * a.pairs * a.window + 30
     test.write_text(profile(total))

@@ -37,6 +37,33 @@ TEST(LiveFeed, LatestOfAKindIsKeptForPagesOpenedLater) {
   EXPECT_EQ(nlohmann::json::parse(feed.latest(kind::kState)->json)["phase"], "pilot");
 }
 
+// State, timing and Bode messages are superseded by the next one: a reader that follows
+// the feed gets each of them, a page opened later only the latest, in sequence order, and
+// never one past a batch that was cut short.
+TEST(LiveFeed, SupersededKindsKeepOnlyTheLatestInTheHistory) {
+  Feed feed;
+  std::uint64_t follower = 0;
+  int states_followed = 0;
+  for (int i = 0; i < 4; ++i) {
+    feed.publish(kind::kSample, {{"i", i}});
+    feed.publish(kind::kState, {{"i", i}});
+    for (const auto& m : feed.since(follower)) {
+      states_followed += m->kind == kind::kState ? 1 : 0;
+      follower = m->seq;
+    }
+  }
+  EXPECT_EQ(states_followed, 4);
+  const auto late = feed.since(0);
+  ASSERT_EQ(late.size(), 5u);  // 4 samples and the last state
+  EXPECT_EQ(late.back()->kind, kind::kState);
+  EXPECT_EQ(nlohmann::json::parse(late.back()->json)["i"], 3);
+  for (std::size_t i = 1; i < late.size(); ++i) EXPECT_LT(late[i - 1]->seq, late[i]->seq);
+  const auto cut = feed.since(0, 2);  // two samples: the state (seq 8) is after them
+  ASSERT_EQ(cut.size(), 2u);
+  EXPECT_EQ(cut.back()->kind, kind::kSample);
+  EXPECT_EQ(feed.size(), 4u);
+}
+
 TEST(LiveFeed, NanBecomesNullAndTheMessageStaysParseable) {
   Feed feed;
   feed.publish(kind::kState, {{"x", std::nan("")}});
