@@ -41,6 +41,29 @@ std::string sse(const Message& m) {
   return fmt::format("id: {}\nevent: {}\ndata: {}\n\n", m.seq, m.kind, m.json);
 }
 
+// A batch as server-sent events, consecutive samples grouped into one "samples" event whose
+// data is their array: a page opened late parses hours of samples at once instead of one
+// event each (94 000 events took a browser 2 s; the groups take a fraction of that).
+std::string sse_batch(const std::vector<MessagePtr>& batch) {
+  std::string out;
+  std::size_t i = 0;
+  while (i < batch.size()) {
+    if (batch[i]->kind != kind::kSample) {
+      out += sse(*batch[i++]);
+      continue;
+    }
+    std::string data = "[";
+    std::uint64_t last = 0;
+    for (; i < batch.size() && batch[i]->kind == kind::kSample; ++i) {
+      if (data.size() > 1) data += ',';
+      data += batch[i]->json;
+      last = batch[i]->seq;
+    }
+    out += fmt::format("id: {}\nevent: samples\ndata: {}]\n\n", last, data);
+  }
+  return out;
+}
+
 }  // namespace
 
 HttpAddress parse_http_address(const std::string& text) {
@@ -109,8 +132,7 @@ void LiveServer::Impl::events(const httplib::Request& req, httplib::Response& re
         while (!stopping.load()) {
           const auto batch = feed.since(after);
           if (!batch.empty()) {
-            std::string chunk;
-            for (const auto& m : batch) chunk += sse(*m);
+            const std::string chunk = sse_batch(batch);
             after = batch.back()->seq;
             if (!sink.write(chunk.data(), chunk.size())) return false;
             continue;

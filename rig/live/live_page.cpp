@@ -130,8 +130,9 @@ es.onerror=()=>{document.body.dataset.stream=S.outcome?'closed':'reconnecting';}
 const on=(k,f)=>es.addEventListener(k,e=>{f(JSON.parse(e.data));dirty=true;});
 on('start',m=>{S.start=m;if(m.command==='monitor')document.querySelectorAll('.commission')
   .forEach(e=>{e.style.display='none';});});on('state',m=>{S.state=m;});on('timing',m=>{S.timing=m;});
-on('sample',m=>{S.t.push(m.t_s);S.dev.push(m.deviation_pct);S.u.push(m.u_pct);
-  S.bo.push(m.backoff?m.deviation_pct:null);});
+const addSample=m=>{S.t.push(m.t_s);S.dev.push(m.deviation_pct);S.u.push(m.u_pct);
+  S.bo.push(m.backoff?m.deviation_pct:null);};
+on('sample',addSample);on('samples',a=>a.forEach(addSample));
 on('event',m=>{S.ev.push(m);});
 on('alarm',m=>{S.ev.push({t_s:m.t_s,kind:m.earlier_run?'alarm (earlier run)':'alarm',
   text:(m.cause||'')+(m.check?': check '+m.check:'')});});
