@@ -41,6 +41,7 @@ inline constexpr const char* kSweepPoint = "sweep_point";  // one swept-sine poi
 inline constexpr const char* kAlarm = "alarm";             // rig monitor: a named fault
 inline constexpr const char* kTrend = "trend";             // rig monitor: one block's parameters
 inline constexpr const char* kTrendHistory = "trend_history";  // rig monitor: earlier runs
+inline constexpr const char* kAlarmHistory = "alarm_history";  // rig monitor: earlier runs
 inline constexpr const char* kTiming = "timing";               // loop timing so far
 inline constexpr const char* kOutcome = "outcome";             // exit code and one-line outcome
 }  // namespace kind

@@ -134,8 +134,9 @@ const addSample=m=>{S.t.push(m.t_s);S.dev.push(m.deviation_pct);S.u.push(m.u_pct
   S.bo.push(m.backoff?m.deviation_pct:null);};
 on('sample',addSample);on('samples',a=>a.forEach(addSample));
 on('event',m=>{S.ev.push(m);});
-on('alarm',m=>{S.ev.push({t_s:m.t_s,kind:m.earlier_run?'alarm (earlier run)':'alarm',
-  text:(m.cause||'')+(m.check?': check '+m.check:'')});});
+const alarm=k=>m=>{S.ev.push({t_s:m.t_s,kind:k,text:(m.cause||'')+(m.check?': check '+
+  m.check:'')});};
+on('alarm',alarm('alarm'));on('alarm_history',alarm('alarm (earlier run)'));
 on('trend_history',m=>{const s=trendSeries(m.name);m.history_s.forEach((x,i)=>{
   s.x.push(x/3600);s.v.push(m.value[i]);s.lo.push(m.lo[i]);s.hi.push(m.hi[i]);});});
 on('trend',m=>{for(const v of m.values){const s=trendSeries(v.name);s.x.push(m.history_s/3600);
