@@ -126,12 +126,7 @@ bool physical_model(const model::ModelFile& m, bool plant_toml) {
 }
 
 double row_alignment_s(const io::Recording& rec) {
-  const auto& raw = rec.sidecar.raw;
-  const double after =
-      raw.is_object() && raw.contains("y_sampled_after_s") && raw["y_sampled_after_s"].is_number()
-          ? raw["y_sampled_after_s"].get<double>()
-          : 0.0;
-  return 0.5 * rec.dt_s - after;
+  return 0.5 * rec.dt_s - rec.sidecar.y_sampled_after_s.value_or(0.0);
 }
 
 int run_diagnose(const DiagnoseArgs& a) {

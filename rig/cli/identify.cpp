@@ -1,19 +1,24 @@
-// rig identify --recording REC.csv [--input COL --output COL | --columns I,J] [--dt S]
-//              [--order n/m|auto] [--delay auto|SECONDS] [--method mmfm|srivc] [--lags N]
+// rig identify --recording REC.csv [--estimation C.csv ...] [--validation B.csv]
+//              [--input COL --output COL | --columns I,J] [--dt S] [--order n/m|auto]
+//              [--delay auto|SECONDS] [--method all|mmfm|mmfm+oe|srivc[,...]] [--lags N]
 //              [--skip S] [--json] --out DIR
-// Reads the recording, runs the data-quality checks (a fatal flag stops with exit 1),
-// identifies the model and writes model.json, report.json and report.html (docs/identify.md).
+// Reads the records, runs the data-quality checks (a fatal flag stops with exit 1), fills
+// the fit table, identifies the model and writes model.json, report.json and report.html
+// (docs/identify.md).
 #include <fmt/format.h>
+#include <unistd.h>
 
 #include <CLI/CLI.hpp>
+#include <algorithm>
 #include <charconv>
 #include <cmath>
+#include <cstdio>
 #include <iostream>
 #include <memory>
 
 #include "rig/cli/commands.hpp"
+#include "rig/cli/identify_records.hpp"
 #include "rig/cli/identify_report.hpp"
-#include "rig/cli/identify_rows.hpp"
 #include "rig/io/out_dir.hpp"
 #include "rig/report/json_out.hpp"
 
@@ -22,23 +27,41 @@ namespace {
 
 struct IdentifyArgs {
   std::string recording;
-  std::string input, output, columns;
-  std::optional<double> dt_s;
-  std::string order = "auto", delay = "auto", method = "mmfm";
+  std::vector<std::string> estimation;  // more estimation records
+  std::string validation;               // a separate validation record
+  ColumnChoice columns;
+  std::string order = "auto", delay = "auto", method = "all";
   int lags = 0;  // 0: min(256, samples / 8)
   int skip = 1;
   double estimation_fraction = 0.5;
-  std::string rows = "auto";  // auto | all | excitation (identify_rows.hpp)
   std::string out;
   bool json = false;
   bool force = false;
 };
 
-constexpr Eigen::Index kMinSamples = 128;
-
 // Usage errors in option values are reported like input errors: one line, exit 2.
 [[noreturn]] void bad_option(const std::string& option, const std::string& expected) {
   throw io::InputError("rig identify", 0, "", option + ": " + expected);
+}
+
+std::vector<ident::IdentMethod> parse_methods(const std::string& text) {
+  if (text == "all")
+    return {ident::IdentMethod::kMmfm, ident::IdentMethod::kMmfmOe, ident::IdentMethod::kSrivc};
+  std::vector<ident::IdentMethod> out;
+  std::size_t at = 0;
+  while (at <= text.size()) {
+    const std::size_t comma = std::min(text.find(',', at), text.size());
+    const auto m = ident::ident_method_from(text.substr(at, comma - at));
+    if (!m) {
+      bad_option("--method",
+                 "expected all, or one or more of mmfm, mmfm+oe, srivc separated by commas, "
+                 "found \"" +
+                     text + "\"");
+    }
+    if (std::find(out.begin(), out.end(), *m) == out.end()) out.push_back(*m);
+    at = comma + 1;
+  }
+  return out;
 }
 
 std::optional<model::ModelOrder> parse_order(const std::string& text) {
@@ -68,110 +91,6 @@ std::optional<double> parse_delay(const std::string& text) {
   return v;
 }
 
-// Which columns are input and output: --input/--output, else --columns I,J (1-based), else
-// "u" and "y", else the only two data columns.
-io::Recording load_recording(const IdentifyArgs& a, std::string& in, std::string& out) {
-  io::ReadOptions ro;
-  ro.dt_s = a.dt_s;
-  ro.min_rows = kMinSamples;
-  in = a.input;
-  out = a.output;
-  if (!a.columns.empty()) {
-    const auto comma = a.columns.find(',');
-    if (comma == std::string::npos)
-      bad_option("--columns", "expected I,J (1-based input and output columns)");
-    in = a.columns.substr(0, comma);
-    out = a.columns.substr(comma + 1);
-  }
-  if (in.empty() != out.empty()) bad_option("--input/--output", "give both columns, or neither");
-  if (!in.empty()) {
-    ro.columns = {in, out};
-    io::Recording rec = io::read_recording(a.recording, ro);
-    in = rec.names[0];
-    out = rec.names[1];
-    return rec;
-  }
-  io::Recording rec = io::read_recording(a.recording, ro);
-  if (rec.has("u") && rec.has("y")) {
-    in = "u";
-    out = "y";
-  } else if (rec.names.size() == 2) {
-    in = rec.names[0];
-    out = rec.names[1];
-  } else {
-    throw io::InputError(rec.source, 0, "",
-                         fmt::format("{} data columns and no u/y: name the "
-                                     "input and output with --input/--output "
-                                     "or --columns I,J",
-                                     rec.names.size()));
-  }
-  return rec;
-}
-
-void require_excitation(const io::Recording& rec, const std::string& in, const Eigen::VectorXd& u) {
-  const double sd = std::sqrt((u.array() - u.mean()).square().mean());
-  if (!(sd > 1e-12 * std::max(1.0, std::abs(u.mean())))) {
-    throw io::InputError(rec.source, 0, in,
-                         fmt::format("expected a varying input, found the "
-                                     "constant {:.6g}: nothing excites the plant",
-                                     u.mean()));
-  }
-}
-
-signal::CorrelatorOptions correlator_options(const IdentifyArgs& a, const io::Recording& rec) {
-  signal::CorrelatorOptions c;
-  c.dt_s = rec.dt_s;
-  c.skip = a.skip;
-  const Eigen::Index n = rec.rows();
-  c.lags = a.lags > 0 ? a.lags : std::max<Eigen::Index>(16, std::min<Eigen::Index>(256, n / 8));
-  if (a.skip < 1) bad_option("--skip", "expected an integer >= 1");
-  if (4 * c.lags > n) {
-    throw io::InputError(rec.source, 0, "",
-                         fmt::format("expected at least {} samples for a lag "
-                                     "window of {} (4 x --lags), found {}",
-                                     4 * c.lags, c.lags, n));
-  }
-  return c;
-}
-
-// Sidecar "coupled_columns" name AC-coupled channels; a channel X_ac with its raw source X
-// in the same recording lets the quality check measure each network's time constant.
-std::vector<ident::CoupledPair> coupled_pairs(const IdentifyArgs& a, const io::Recording& rec,
-                                              const RowSelection& rows) {
-  std::vector<ident::CoupledPair> pairs;
-  for (const std::string& name : rec.sidecar.coupled_columns) {
-    const std::string suffix = "_ac";
-    if (name.size() <= suffix.size() ||
-        name.compare(name.size() - suffix.size(), suffix.size(), suffix) != 0) {
-      continue;
-    }
-    io::ReadOptions ro;
-    ro.columns = {name.substr(0, name.size() - suffix.size()), name};
-    ro.dt_s = rec.dt_s;
-    ro.min_rows = rows.total;
-    try {
-      const io::Recording both = io::read_recording(a.recording, ro);
-      pairs.push_back({name, both.columns[0].segment(rows.first, rows.count),
-                       both.columns[1].segment(rows.first, rows.count)});
-    } catch (const io::InputError&) {
-      // No raw source in the recording: the network cannot be measured, nothing to compare.
-    }
-  }
-  return pairs;
-}
-
-ident::QualityOptions quality_options(const io::Recording& rec, const signal::CorrelatorOptions& c,
-                                      const std::optional<model::ModelOrder>& order,
-                                      bool delay_auto) {
-  ident::QualityOptions q;
-  q.correlator = c;
-  q.order = order.value_or(model::ModelOrder{2, 0});
-  q.delay_estimated = delay_auto;
-  q.coupling_rc_s = rec.sidecar.coupling_rc_s;
-  q.jitter_max_s = rec.sampling.has_time ? rec.sampling.jitter_max_s : 0.0;
-  return q;
-}
-
 void emit(const IdentifyArgs& a, const nlohmann::json& rep, const std::string& summary,
           bool failed) {
   if (a.json) {
@@ -181,38 +100,96 @@ void emit(const IdentifyArgs& a, const nlohmann::json& rep, const std::string& s
   }
 }
 
+std::vector<IdentifyRecord> load_records(const IdentifyArgs& a) {
+  if (!a.estimation.empty() && a.validation.empty()) {
+    bad_option("--estimation",
+               "more estimation records need a separate --validation record to choose on");
+  }
+  std::vector<IdentifyRecord> records;
+  records.push_back(load_identify_record(a.recording, a.columns, "estimation"));
+  ColumnChoice same = a.columns;
+  same.columns.clear();
+  same.input = records.front().input;
+  same.output = records.front().output;
+  for (const std::string& path : a.estimation)
+    records.push_back(load_identify_record(path, same, "estimation"));
+  if (!a.validation.empty())
+    records.push_back(load_identify_record(a.validation, same, "validation"));
+  check_records_agree(records);
+  return records;
+}
+
+// A's quality report with every other record's flags, named by their file.
+ident::QualityReport combined_quality(const std::vector<IdentifyRecord>& records) {
+  ident::QualityReport q = records.front().quality;
+  for (std::size_t i = 1; i < records.size(); ++i) {
+    for (ident::QualityFlag f : records[i].quality.flags) {
+      f.message = records[i].rec.source + " (" + records[i].role + "): " + f.message;
+      q.flags.push_back(f);
+    }
+  }
+  return q;
+}
+
+// Progress of the fit table on an interactive terminal (nothing in a pipe or a log).
+ident::TableProgress table_progress(bool json) {
+  if (json || !isatty(fileno(stderr))) return {};
+  return [](int done, int total) {
+    std::fprintf(stderr, "\r  fit table: %d/%d structures", done, total);
+    if (done == total) std::fprintf(stderr, "\r%*s\r", 40, "");
+    std::fflush(stderr);
+  };
+}
+
+ident::IdentifyResult identify_records(const IdentifyArgs& a,
+                                       const std::vector<IdentifyRecord>& records,
+                                       const IdentifyContext& ctx) {
+  ident::IdentifyOptions o;
+  o.methods = parse_methods(a.method);
+  o.order = parse_order(a.order);
+  o.delay_s = parse_delay(a.delay);
+  o.correlator = ctx.correlator;
+  o.estimation_fraction = a.estimation_fraction;
+  o.progress = table_progress(a.json);
+  const double dt_s = records.front().rec.dt_s;
+  if (a.validation.empty())
+    return ident::identify(records.front().u(), records.front().y(), dt_s, o);
+  ident::RecordSet est, val;
+  for (const IdentifyRecord& r : records) (r.role == "validation" ? val : est).add(r.u(), r.y());
+  const double corr_est = ctx.timing_correction_s.value_or(0.0);
+  o.validation_delay_shift_s = corr_est - records.back().timing_correction_s().value_or(corr_est);
+  return ident::identify(est, val, dt_s, o);
+}
+
 int run_identify(const IdentifyArgs& a) {
   io::prepare_out_dir(a.out, a.force);
+  std::vector<IdentifyRecord> records = load_records(a);
   IdentifyContext ctx;
-  std::string in, out;
-  const io::Recording whole = load_recording(a, in, out);
-  ctx.rows = select_rows(a.recording, whole, a.rows);
-  const io::Recording rec = slice_rows(whole, ctx.rows);
-  if (rec.rows() < kMinSamples) {
-    throw io::InputError(rec.source, 0, "",
-                         fmt::format("expected at least {} rows, the selection "
-                                     "({}) holds {}",
-                                     kMinSamples, ctx.rows.reason, rec.rows()));
-  }
-  ctx.recording = &rec;
-  ctx.input = in;
-  ctx.output = out;
+  const IdentifyRecord& first = records.front();
+  ctx.recording = &first.rec;
+  ctx.rows = first.rows;
+  ctx.input = first.input;
+  ctx.output = first.output;
   ctx.method = a.method;
   ctx.order_arg = a.order;
   ctx.delay_arg = a.delay;
   ctx.estimation_fraction = a.estimation_fraction;
+  ctx.records = &records;
+  ctx.timing_correction_s = first.timing_correction_s();
   const auto order = parse_order(a.order);
   const auto delay = parse_delay(a.delay);
-  const Eigen::VectorXd& u = rec.column(in);
-  const Eigen::VectorXd& y = rec.column(out);
-  require_excitation(rec, in, u);
-  ctx.correlator = correlator_options(a, rec);
-  ident::QualityOptions qo = quality_options(rec, ctx.correlator, order, !delay);
-  qo.coupled_pairs = coupled_pairs(a, rec, ctx.rows);
-  const ident::QualityReport quality = ident::check_quality(u, y, rec.dt_s, qo);
+  parse_methods(a.method);
+  ctx.correlator = identify_correlator(first, a.lags, a.skip);
+  std::vector<std::string> paths{a.recording};
+  paths.insert(paths.end(), a.estimation.begin(), a.estimation.end());
+  if (!a.validation.empty()) paths.push_back(a.validation);
+  for (std::size_t i = 0; i < records.size(); ++i)
+    check_record_quality(records[i], paths[i], ctx.correlator, order, !delay);
+  const ident::QualityReport quality = combined_quality(records);
   const std::filesystem::path dir(a.out);
   if (quality.has_fatal()) {
-    const Eigen::VectorXd uc = u.array() - u.mean(), yc = y.array() - y.mean();
+    const Eigen::VectorXd uc = first.u().array() - first.u().mean();
+    const Eigen::VectorXd yc = first.y().array() - first.y().mean();
     const auto ruu = signal::auto_correlation(uc, ctx.correlator);
     const auto ryu = signal::cross_correlation(yc, uc, ctx.correlator);
     const nlohmann::json rep = identify_report_json(ctx, quality, nullptr);
@@ -221,13 +198,8 @@ int run_identify(const IdentifyArgs& a) {
     emit(a, rep, identify_summary(ctx, quality, nullptr, dir), true);
     return kExitAcceptance;
   }
-  ident::IdentifyOptions io_opt;
-  io_opt.method = a.method == "srivc" ? ident::IdentMethod::kSrivc : ident::IdentMethod::kMmfm;
-  io_opt.order = order;
-  io_opt.delay_s = delay;
-  io_opt.correlator = ctx.correlator;
-  io_opt.estimation_fraction = a.estimation_fraction;
-  const ident::IdentifyResult result = ident::identify(u, y, rec.dt_s, io_opt);
+  ident::IdentifyResult result = identify_records(a, records, ctx);
+  if (ctx.timing_correction_s) refer_delays_to_plant(result, *ctx.timing_correction_s);
   model::write_model(dir / "model.json", identify_model_file(ctx, result));
   const nlohmann::json rep = identify_report_json(ctx, quality, &result);
   report::write_json_file(dir / "report.json", rep);
@@ -245,26 +217,38 @@ void add_identify_command(CLI::App& app) {
       "Identify a transfer function from a recording (data-quality checks, "
       "MMFM or SRIVC, order and delay selection); writes model.json, report.json, "
       "report.html");
-  cmd->add_option("--recording", a->recording, "Recording: CSV with header, or .dat without")
+  cmd->add_option("--recording", a->recording,
+                  "Recording to estimate on: CSV with header, or .dat without")
       ->required();
-  cmd->add_option("--input", a->input, "Input column name (default u, or the first of two)");
-  cmd->add_option("--output", a->output, "Output column name (default y, or the second of two)");
-  cmd->add_option("--columns", a->columns, "Input and output columns by 1-based index: I,J")
+  cmd->add_option("--estimation", a->estimation,
+                  "More records to estimate on, with the recording (repeatable; needs "
+                  "--validation)");
+  cmd->add_option("--validation", a->validation,
+                  "A separate record to validate on: the fit table is scored on it and it "
+                  "takes no part in the estimate (default: the recording's held-out tail)");
+  cmd->add_option("--input", a->columns.input,
+                  "Input column name (default u, or the first of two)");
+  cmd->add_option("--output", a->columns.output,
+                  "Output column name (default y, or the second of two)");
+  cmd->add_option("--columns", a->columns.columns, "Input and output columns by 1-based index: I,J")
       ->excludes(cmd->get_option("--input"))
       ->excludes(cmd->get_option("--output"));
-  cmd->add_option("--dt", a->dt_s, "Sample period in s (overrides the time column and sidecar)");
+  cmd->add_option("--dt", a->columns.dt_s,
+                  "Sample period in s (overrides the time column and sidecar)");
   cmd->add_option("--order", a->order, "Model order n/m (den/num), or auto")->default_str("auto");
   cmd->add_option("--delay", a->delay, "Dead time in s, or auto")->default_str("auto");
-  cmd->add_option("--method", a->method, "Estimator")
-      ->check(CLI::IsMember({"mmfm", "srivc"}))
-      ->default_str("mmfm");
+  cmd->add_option("--method", a->method,
+                  "Estimators in the fit table: all, or any of mmfm, mmfm+oe (MMFM refined by "
+                  "the time-domain output error), srivc, separated by commas")
+      ->default_str("all");
   cmd->add_option("--lags", a->lags, "Correlation lag window in samples (default min(256, N/8))");
   cmd->add_option("--skip", a->skip, "Fell's skip: form every S-th product")->default_str("1");
   cmd->add_option("--estimation-fraction", a->estimation_fraction,
-                  "Share of the record used for estimation; the rest validates")
+                  "Without --validation: the share of the recording used for estimation; the "
+                  "rest validates")
       ->check(CLI::Range(0.2, 0.8))
       ->default_str("0.5");
-  cmd->add_option("--rows", a->rows,
+  cmd->add_option("--rows", a->columns.rows,
                   "Rows to use: auto (a rig commission recording's excitation phase, else all), "
                   "all, or excitation")
       ->default_str("auto");

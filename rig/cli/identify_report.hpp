@@ -6,6 +6,7 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
+#include "rig/cli/identify_records.hpp"
 #include "rig/cli/identify_rows.hpp"
 #include "rig/ident/identify.hpp"
 #include "rig/ident/quality.hpp"
@@ -19,12 +20,19 @@ struct IdentifyContext {
   const io::Recording* recording = nullptr;
   std::string input;  // column names
   std::string output;
-  std::string method;                    // "mmfm" | "srivc"
+  std::string method;                    // --method as given ("all", "mmfm,srivc", ...)
   std::string order_arg;                 // "auto" | "n/m"
   std::string delay_arg;                 // "auto" | seconds
   signal::CorrelatorOptions correlator;  // as used (dt_s set)
   double estimation_fraction = 0.5;
-  RowSelection rows;  // which rows of the file `recording` holds
+  RowSelection rows;                                     // which rows of the file `recording` holds
+  const std::vector<IdentifyRecord>* records = nullptr;  // every record, `recording` first
+  // Added to dead times identified on the rows to refer them to the plant (sidecar
+  // y_sampled_after_s); empty: they refer to the rows.
+  std::optional<double> timing_correction_s;
+  bool separate_validation() const {
+    return records && !records->empty() && records->back().role == "validation";
+  }
 };
 
 // result == nullptr: the data-quality checks stopped the run (status "data_quality_failed").

@@ -2,9 +2,9 @@
 
 #include <algorithm>
 #include <cmath>
-#include <random>
 
 #include "rig/cli/identify_report.hpp"
+#include "rig/cli/identify_report_sections.hpp"
 #include "rig/report/bode_chart.hpp"
 #include "rig/report/html_report.hpp"
 #include "rig/report/json_out.hpp"
@@ -18,6 +18,15 @@ using report::HtmlReport;
 std::vector<double> lags_s(const signal::Correlation& c) {
   std::vector<double> out;
   for (Eigen::Index i = 0; i < c.size(); ++i) out.push_back(c.lag_s(i));
+  return out;
+}
+
+std::string records_text(const IdentifyContext& ctx) {
+  if (!ctx.records || ctx.records->size() < 2)
+    return "one: estimated on its first part, validated on the rest";
+  std::string out;
+  for (const IdentifyRecord& r : *ctx.records)
+    out += (out.empty() ? "" : "; ") + r.role + " " + r.rec.source;
   return out;
 }
 
@@ -49,39 +58,11 @@ void correlation_charts(HtmlReport& page, const signal::Correlation& ruu,
   page.chart(cross);
 }
 
-// Band of |H| from seeded draws of the coefficients with their standard errors taken as
-// independent (5 % and 95 % quantiles of 400 draws, seed 1).
-std::pair<std::vector<double>, std::vector<double>> magnitude_band(const ident::IdentifyResult& r,
-                                                                   const std::vector<double>& f) {
-  std::mt19937_64 rng(1);
-  std::normal_distribution<double> z(0.0, 1.0);
-  const int draws = 400;
-  std::vector<std::vector<double>> mags(f.size());
-  for (int d = 0; d < draws; ++d) {
-    model::TransferFunction tf = r.model;
-    for (const auto& p : r.parameters) {
-      if (!std::isfinite(p.std_error) || p.name.size() < 2) continue;
-      const int power = std::atoi(p.name.c_str() + 1);
-      Eigen::VectorXd& poly = p.name[0] == 'a' ? tf.den : tf.num;
-      if (p.name[0] != 'a' && p.name[0] != 'b') continue;
-      const Eigen::Index idx = poly.size() - 1 - power;
-      if (idx >= 0 && idx < poly.size()) poly[idx] += p.std_error * z(rng);
-    }
-    for (std::size_t i = 0; i < f.size(); ++i) mags[i].push_back(std::abs(tf.response(f[i])));
-  }
-  std::vector<double> lo, hi;
-  for (auto& m : mags) {
-    std::sort(m.begin(), m.end());
-    lo.push_back(m[std::size_t(0.05 * draws)]);
-    hi.push_back(m[std::size_t(0.95 * draws)]);
-  }
-  return {lo, hi};
-}
-
 // Blackman-Tukey estimate H = S_yu / S_uu from the correlations (Bartlett lag window),
 // where the input carries at least 1 % of its peak power; NaN elsewhere.
+// delay_s: added to the estimate's dead time (the rows' timing to the plant's).
 std::vector<std::complex<double>> correlation_frf(const ident::IdentifyResult& r,
-                                                  const std::vector<double>& f) {
+                                                  const std::vector<double>& f, double delay_s) {
   auto spectrum = [](const signal::Correlation& c, double fh) {
     const double half = double(std::max(c.negative_lags(), c.positive_lags()) + 1);
     std::complex<double> s = 0.0;
@@ -98,28 +79,41 @@ std::vector<std::complex<double>> correlation_frf(const ident::IdentifyResult& r
     peak = std::max(peak, std::abs(suu.back()));
   }
   for (std::size_t i = 0; i < f.size(); ++i) {
-    h.push_back(std::abs(suu[i]) >= 0.01 * peak ? spectrum(r.ryu, f[i]) / suu[i]
+    const std::complex<double> shift =
+        std::exp(std::complex<double>(0.0, -2 * M_PI * f[i] * delay_s));
+    h.push_back(std::abs(suu[i]) >= 0.01 * peak ? shift * spectrum(r.ryu, f[i]) / suu[i]
                                                 : std::complex<double>(NAN, NAN));
   }
   return h;
 }
 
-void bode_block(HtmlReport& page, const ident::IdentifyResult& r, double dt_s) {
-  const double f_hi = 0.4 / dt_s;
-  const auto f = report::log_space(f_hi / 1000.0, f_hi, 160);
+void bode_block(HtmlReport& page, const IdentifyContext& ctx, const ident::IdentifyResult& r,
+                double dt_s) {
   report::BodeCurve model{"model"};
-  for (double fh : f) model.response.push_back(r.model.response(fh));
-  auto [lo, hi] = magnitude_band(r, f);
-  model.mag_lo = lo;
-  model.mag_hi = hi;
-  report::BodeCurve measured{"from correlations", correlation_frf(r, f)};
+  std::vector<double> f;
+  bode_band_curve(r, model, f);
+  if (f.empty()) {
+    const double f_hi = 0.4 / dt_s;
+    f = report::log_space(f_hi / 1000.0, f_hi, 160);
+    for (double fh : f) model.response.push_back(r.model.response(fh));
+  }
+  report::BodeCurve measured{"from correlations",
+                             correlation_frf(r, f, ctx.timing_correction_s.value_or(0.0))};
   measured.points = true;
   measured.color = "#555";
   const auto [mag, phase] = report::bode_charts("Bode plot", f, {model, measured});
   page.section("Frequency response");
-  page.paragraph(
-      "Shaded: 5-95 % band of |H| from the parameter standard errors (taken as "
-      "independent, 400 seeded draws). Points: S_yu/S_uu from the correlations.");
+  double db = 0.0, deg = 0.0;
+  for (const auto& b : r.band) db = std::max(db, b.sd_db), deg = std::max(deg, b.sd_deg);
+  page.paragraph(fmt::format(
+      "Shaded: simultaneous 95 % band (factor {:.2f} standard deviations, holding at every "
+      "frequency at once; at its widest +-{:.2g} dB and +-{:.2g} deg) from the asymptotic "
+      "covariance of all the parameters with their correlations, the same covariance the "
+      "online stop rule uses. Points: S_yu/S_uu from the correlations.{}",
+      r.band_factor, r.band_factor * db, r.band_factor * deg,
+      ctx.timing_correction_s ? " Phases and dead times refer to the plant (the sidecar's "
+                                "sample timing)."
+                              : ""));
   page.chart(mag).chart(phase);
 }
 
@@ -141,17 +135,6 @@ void model_block(HtmlReport& page, const IdentifyContext& ctx, const ident::Iden
          {"damping ratio", fmt::format("{:.4g} +- {:.2g}", r.derived.zeta, r.derived.zeta_std)},
          {"dead time", fmt::format("{:.4g} +- {:.2g} s", r.delay_s, r.delay_std_s)}});
   }
-  report::Table orders{{"order n/m", "fit %", "validation fit %", "score", "delay (s)"}};
-  for (std::size_t i = 0; i < r.order_table.size(); ++i) {
-    const auto& o = r.order_table[i];
-    orders.rows.push_back({fmt::format("{}/{}", o.order.n, o.order.m),
-                           fmt::format("{:.1f}", o.fit_pct),
-                           fmt::format("{:.1f}", o.validation_fit_pct),
-                           fmt::format("{:.2f}", o.score), fmt::format("{:.4g}", o.delay_s)});
-    if (o.order == r.order) orders.highlight_rows.push_back(i);
-  }
-  page.section("Model orders (estimated on the first part, validated on the rest)");
-  page.table(orders);
   page.paragraph("Settings: " + r.settings + "; standard errors: " + r.std_error_method +
                  "; input " + ctx.input + ", output " + ctx.output + ".");
 }
@@ -163,20 +146,31 @@ void write_identify_html(const std::filesystem::path& path, const IdentifyContex
                          const signal::Correlation& ruu, const signal::Correlation& ryu) {
   const io::Recording& rec = *ctx.recording;
   HtmlReport page("rig identify: " + rec.source);
-  page.key_values({{"recording", rec.source},
-                   {"samples", fmt::format("{} at {:.6g} s ({})", rec.rows(), rec.dt_s,
-                                           rec.sampling.dt_source)},
-                   {"rows", ctx.rows.reason},
-                   {"input / output", ctx.input + " / " + ctx.output},
-                   {"method", ctx.method + ", order " + ctx.order_arg + ", delay " + ctx.delay_arg},
-                   {"result", r ? fmt::format("validation fit {:.1f} % (order {}/{})",
-                                              r->validation_fit_pct, r->order.n, r->order.m)
-                                : std::string("not identified: data-quality checks failed")}});
+  page.key_values(
+      {{"recording", rec.source},
+       {"samples",
+        fmt::format("{} at {:.6g} s ({})", rec.rows(), rec.dt_s, rec.sampling.dt_source)},
+       {"rows", ctx.rows.reason},
+       {"input / output", ctx.input + " / " + ctx.output},
+       {"records", records_text(ctx)},
+       {"asked", "methods " + ctx.method + ", order " + ctx.order_arg + ", delay " + ctx.delay_arg},
+       {"dead time refers to",
+        ctx.timing_correction_s
+            ? fmt::format("the plant (y sampled {:.4g} s after u; {:+.4g} s added)",
+                          rec.sidecar.y_sampled_after_s.value_or(0.0), *ctx.timing_correction_s)
+            : std::string("the recording's rows (no sample timing in a sidecar)")},
+       {"result",
+        r ? fmt::format("validation fit {:.1f} % ({})", r->validation_fit_pct, r->structure.name())
+          : std::string("not identified: data-quality checks failed")}});
   for (const auto& w : rec.warnings) page.note(report::Tone::kWarning, w);
   quality_block(page, quality);
-  if (r) model_block(page, ctx, *r);
+  if (r) {
+    model_block(page, ctx, *r);
+    fit_table_block(page, ctx, *r);
+    validation_block(page, *r, rec.dt_s);
+  }
   correlation_charts(page, ruu, ryu, r ? &r->model_ryu : nullptr);
-  if (r) bode_block(page, *r, rec.dt_s);
+  if (r) bode_block(page, ctx, *r, rec.dt_s);
   page.write(path);
 }
 
@@ -190,16 +184,20 @@ std::string identify_summary(const IdentifyContext& ctx, const ident::QualityRep
   for (const auto& f : quality.flags)
     s += fmt::format("  {}: {}\n", ident::to_string(f.severity), f.message);
   if (r) {
-    s += fmt::format("  model ({}, order {}/{}): H(s) = e^(-{:.4g} s) ({}) / ({})\n", ctx.method,
-                     r->order.n, r->order.m, r->model.delay_s, polynomial_text(r->model.num),
-                     polynomial_text(r->model.den));
+    s +=
+        fmt::format("  model ({}): H(s) = e^(-{:.4g} s) ({}) / ({})\n", r->structure.name(),
+                    r->model.delay_s, polynomial_text(r->model.num), polynomial_text(r->model.den));
+    s += fmt::format("  chosen from {} structures: {}\n", r->table.rows.size(), r->table.rule);
     if (r->derived.valid) {
       s += fmt::format("  gain {:.4g} +- {:.2g}, fn {:.4g} +- {:.2g} Hz, zeta {:.4g} +- {:.2g}\n",
                        r->derived.gain, r->derived.gain_std, r->derived.fn_hz, r->derived.fn_hz_std,
                        r->derived.zeta, r->derived.zeta_std);
     }
-    s += fmt::format("  dead time {:.4g} +- {:.2g} s, validation fit {:.1f} %\n", r->delay_s,
-                     r->delay_std_s, r->validation_fit_pct);
+    s += fmt::format(
+        "  dead time {:.4g} +- {:.2g} s (refers to the {}), validation fit {:.1f} % "
+        "on the {}\n",
+        r->delay_s, r->delay_std_s, ctx.timing_correction_s ? "plant" : "rows",
+        r->validation_fit_pct, r->validation.what);
     s += fmt::format("  wrote {}, {}, {}\n", (out / "model.json").string(),
                      (out / "report.json").string(), (out / "report.html").string());
   } else {

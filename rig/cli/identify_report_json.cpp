@@ -1,5 +1,8 @@
 #include <fmt/format.h>
 
+#include <algorithm>
+#include <cmath>
+
 #include "rig/cli/identify_report.hpp"
 #include "rig/report/json_out.hpp"
 
@@ -63,22 +66,87 @@ json settings_json(const IdentifyContext& ctx, const ident::IdentifyResult* r) {
   return j;
 }
 
+json structure_json(const ident::Structure& s) {
+  return {{"name", s.name()},
+          {"n", s.order.n},
+          {"m", s.order.m},
+          {"delay_estimated", s.delay_estimated},
+          {"method", ident::to_string(s.method)},
+          {"parameters", s.parameters()}};
+}
+
+json fit_table_json(const ident::StructureTable& t) {
+  double aic0 = INFINITY, bic0 = INFINITY;
+  for (const auto& f : t.rows)
+    if (f.ok) aic0 = std::min(aic0, f.aic), bic0 = std::min(bic0, f.bic);
+  json rows = json::array();
+  for (std::size_t i = 0; i < t.rows.size(); ++i) {
+    const ident::StructureFit& f = t.rows[i];
+    json row = structure_json(f.structure);
+    row["ok"] = f.ok;
+    row["error"] = f.ok ? json(nullptr) : json(f.error);
+    row["delay_s"] = f.ok ? number_or_null(f.model.delay_s) : json(nullptr);
+    row["estimation_fit_pct"] = number_or_null(f.estimation_fit_pct);
+    row["validation_fit_pct"] = number_or_null(f.validation_fit_pct);
+    row["aic"] = number_or_null(f.aic);
+    row["bic"] = number_or_null(f.bic);
+    row["delta_aic"] = number_or_null(f.aic - aic0);
+    row["delta_bic"] = number_or_null(f.bic - bic0);
+    row["adequate"] = f.adequate;
+    row["selected"] = static_cast<int>(i) == t.chosen;
+    rows.push_back(row);
+  }
+  return {{"rule", t.rule}, {"chosen", t.chosen}, {"best", t.best}, {"rows", rows}};
+}
+
+json validation_json(const ident::ValidationData& v) {
+  const ident::ResidualTests& t = v.residuals;
+  return {{"data", v.what},
+          {"samples", v.y.size()},
+          {"fit_pct", number_or_null(v.fit_pct)},
+          {"residual_tests",
+           {{"max_lag_s",
+             t.lags_s.size() ? number_or_null(t.lags_s(t.lags_s.size() - 1)) : json(nullptr)},
+            {"whiteness_ratio", number_or_null(t.whiteness_ratio)},
+            {"white", t.white},
+            {"cross_ratio", number_or_null(t.cross_ratio)},
+            {"cross_threshold", number_or_null(t.cross_threshold)},
+            {"cross_peak_lag_s", number_or_null(t.cross_peak_lag_s)},
+            {"independent", t.independent}}}};
+}
+
+json band_json(const ident::IdentifyResult& r) {
+  double db = 0.0, deg = 0.0;
+  for (const auto& b : r.band) db = std::max(db, b.sd_db), deg = std::max(deg, b.sd_deg);
+  return {{"method", "asymptotic covariance (frf_uncertainty), simultaneous 95 %"},
+          {"factor", number_or_null(r.band_factor)},
+          {"points", r.band.size()},
+          {"max_sd_db", number_or_null(db)},
+          {"max_sd_deg", number_or_null(deg)}};
+}
+
+json records_json(const IdentifyContext& ctx) {
+  json out = json::array();
+  if (!ctx.records) return out;
+  for (const IdentifyRecord& r : *ctx.records) {
+    out.push_back(
+        {{"path", r.rec.source},
+         {"role", r.role},
+         {"rows", r.rec.rows()},
+         {"rows_reason", r.rows.reason},
+         {"y_sampled_after_s",
+          r.rec.sidecar.y_sampled_after_s ? json(*r.rec.sidecar.y_sampled_after_s) : json(nullptr)},
+         {"quality_passed", !r.quality.has_fatal()}});
+  }
+  return out;
+}
+
 json result_json(const ident::IdentifyResult& r) {
   json params = json::array();
   for (const auto& p : r.parameters) {
     params.push_back({{"name", p.name},
                       {"value", number_or_null(p.value)},
                       {"std_error", number_or_null(p.std_error)}});
-  }
-  json orders = json::array();
-  for (const auto& o : r.order_table) {
-    orders.push_back({{"n", o.order.n},
-                      {"m", o.order.m},
-                      {"fit_pct", number_or_null(o.fit_pct)},
-                      {"validation_fit_pct", number_or_null(o.validation_fit_pct)},
-                      {"score", number_or_null(o.score)},
-                      {"delay_s", number_or_null(o.delay_s)},
-                      {"selected", o.order == r.order}});
   }
   json derived = nullptr;
   if (r.derived.valid) {
@@ -101,8 +169,11 @@ json result_json(const ident::IdentifyResult& r) {
       {"delay",
        {{"value_s", number_or_null(r.delay_s)}, {"std_error_s", number_or_null(r.delay_std_s)}}},
       {"derived", derived},
-      {"order_table", orders},
+      {"structure", structure_json(r.structure)},
+      {"fit_table", fit_table_json(r.table)},
       {"validation_fit_pct", number_or_null(r.validation_fit_pct)},
+      {"validation", validation_json(r.validation)},
+      {"bode_band", band_json(r)},
       {"condition_number", number_or_null(r.condition_number)}};
 }
 
@@ -115,7 +186,12 @@ json identify_report_json(const IdentifyContext& ctx, const ident::QualityReport
             {"exit_code", result ? 0 : 1},
             {"recording", recording_json(ctx)},
             {"settings", settings_json(ctx, result)},
-            {"quality", quality_json(quality)}};
+            {"quality", quality_json(quality)},
+            {"records", records_json(ctx)},
+            {"timing",
+             {{"refers_to", ctx.timing_correction_s ? "plant" : "rows"},
+              {"correction_s",
+               ctx.timing_correction_s ? json(*ctx.timing_correction_s) : json(nullptr)}}}};
   if (result) {
     j.update(result_json(*result));
     j["files"] = {{"model", "model.json"}, {"report_html", "report.html"}};
@@ -142,7 +218,10 @@ model::ModelFile identify_model_file(const IdentifyContext& ctx, const ident::Id
                       {"std_error", number_or_null(p.std_error)}});
   }
   m.extra["parameters"] = params;
-  m.extra["method"] = ctx.method;
+  m.extra["method"] = ident::to_string(r.structure.method);
+  m.extra["structure"] = r.structure.name();
+  // The dead time refers to the plant (sidecar y_sampled_after_s), as rig commission's.
+  if (ctx.timing_correction_s) m.extra["timing"] = "plant";
   m.extra["source"] = ctx.recording->source;
   return m;
 }

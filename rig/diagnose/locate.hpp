@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "rig/diagnose/augmented_model.hpp"
+#include "rig/ident/residual_tests.hpp"
 
 namespace rig::diagnose {
 
@@ -56,18 +57,8 @@ struct AmplitudeLocation {
   bool amplitude_dependent = false, sign_dependent = false, direction_dependent = false;
 };
 
-struct ResidualTests {
-  Eigen::VectorXd lags_s;        // 0..M (auto) and -M..M (cross) share dt
-  Eigen::VectorXd auto_corr;     // rho_rr(k), k = 0..M
-  Eigen::VectorXd cross_corr;    // rho_ru(k), k = -M..M
-  Eigen::VectorXd cross_bound;   // 99 % bound per lag (Ljung 16.60)
-  double auto_bound = 0.0;       // 2.58 / sqrt(N)
-  double whiteness_ratio = 0.0;  // max |rho_rr(k>0)| / bound
-  double cross_ratio = 0.0;      // max |rho_ru(k)| / bound_k
-  double cross_peak_lag_s = 0.0;
-  double cross_threshold = 0.0;  // family-wise (over lags) ratio threshold
-  bool white = true, independent = true;
-};
+using ident::residual_tests;
+using ident::ResidualTests;
 
 struct Disturbances {
   double line_freq_hz = 0.0, line_ratio = 0.0;  // strongest residual spectral line
@@ -91,8 +82,6 @@ FrequencyLocation locate_frequency(const Problem& pr, const Eigen::VectorXd& res
 std::vector<TimeWindow> locate_time(const Problem& pr, const Eigen::VectorXd& residual);
 AmplitudeLocation locate_amplitude(const Problem& pr, const Eigen::VectorXd& residual,
                                    const Eigen::VectorXd& yhat);
-ResidualTests residual_tests(const Eigen::VectorXd& residual, const Eigen::VectorXd& u, double dt_s,
-                             Eigen::Index max_lag);
 Disturbances locate_disturbances(const Problem& pr, const Eigen::VectorXd& residual,
                                  const FrequencyLocation& freq);
 Location locate(const Problem& pr, const Eigen::VectorXd& baseline_yhat);

@@ -1,10 +1,16 @@
-// Whole-record identification (`rig identify` and the online loop's final step).
+// Whole-record identification (`rig identify`, and the pilot's model for a sweep-only test).
 //
-// Means are removed; the first estimation_fraction of the record estimates every candidate
-// order, the rest validates it (simulation fit, DESIGN.md 5); the chosen order is then
-// re-estimated on the whole record. Standard errors: from the spread of estimates over
-// consecutive blocks (batch means, std / sqrt(blocks)) when the record is long enough,
-// otherwise the estimator's own analytic value.
+// Every structure of the fit table (structure_table.hpp) is estimated on the estimation data
+// and scored on validation data; the table's rule chooses one. Two ways in:
+//  * one record: the first estimation_fraction estimates, the rest validates; the chosen
+//    structure is then re-estimated on the whole record;
+//  * estimation records and a separate validation record (seed 001's practice): the model is
+//    the chosen structure's estimate from the estimation records, the validation record
+//    takes no part in it.
+// Standard errors: one record with MMFM, the spread of estimates over consecutive blocks
+// (batch means, std / sqrt(blocks)) when the record is long enough; otherwise the asymptotic
+// covariance of frf_uncertainty.hpp, the same one the online stop rule uses. That covariance
+// (all its correlations, not independent errors) also gives the Bode band.
 #pragma once
 
 #include <Eigen/Core>
@@ -12,60 +18,67 @@
 #include <string>
 #include <vector>
 
+#include "rig/ident/frf_uncertainty.hpp"
 #include "rig/ident/mmfm.hpp"
 #include "rig/ident/parameters.hpp"
+#include "rig/ident/residual_tests.hpp"
+#include "rig/ident/structure_table.hpp"
 #include "rig/model/transfer_function.hpp"
 #include "rig/signal/correlation.hpp"
 #include "rig/signal/correlators.hpp"
 
 namespace rig::ident {
 
-enum class IdentMethod { kMmfm, kSrivc };
-const char* to_string(IdentMethod method);
+// Residual tests on the validation data over this many seconds of lag (the plant's
+// memory: the Stornoway set's impulse response has decayed to 5 % within 2 s).
+inline constexpr double kResidualMaxLagS = 2.0;
 
-struct OrderScore {
-  model::ModelOrder order;
-  double fit_pct = 0.0;             // on the estimation part
-  double validation_fit_pct = 0.0;  // on the held-out part
-  double score = 0.0;               // validation fit - penalty * parameters
-  double delay_s = 0.0;
+struct IdentifyOptions : StructureTableOptions {
+  double estimation_fraction = 0.5;   // one record: the share that estimates
+  int blocks = 8;                     // block-spread standard errors; 0: asymptotic
+  std::vector<double> band_freqs_hz;  // Bode band; empty: 160 log-spaced up to 0.4 / dt
+  TableProgress progress;
 };
 
-struct IdentifyOptions {
-  IdentMethod method = IdentMethod::kMmfm;
-  std::optional<model::ModelOrder> order;  // nullopt: selected from candidates
-  std::optional<double> delay_s;           // nullopt: estimated
-  signal::CorrelatorOptions correlator;    // dt_s is overwritten with the record's dt
-  double estimation_fraction = 0.5;
-  std::vector<model::ModelOrder> candidates = {{1, 0}, {2, 0}, {2, 1}, {3, 0}, {3, 1},
-                                               {3, 2}, {4, 0}, {4, 1}, {4, 2}};
-  double penalty_pct_per_parameter = 0.1;
-  int blocks = 8;             // for block-spread standard errors; 0: analytic
-  double max_delay_s = -1.0;  // < 0: automatic
-  MmfmOptions mmfm;           // order/delay fields are overridden
+// The validation data with the model's output on them (the table's chosen estimate).
+struct ValidationData {
+  std::string what;  // "held-out part" or "validation record"
+  Eigen::VectorXd u, y, y_model;
+  double fit_pct = 0.0;
+  ResidualTests residuals;
 };
 
 struct IdentifyResult {
-  IdentMethod method = IdentMethod::kMmfm;
+  Structure structure;  // the chosen one
   model::TransferFunction model;
   std::vector<ParameterEstimate> parameters;
   double delay_s = 0.0;
   double delay_std_s = 0.0;
   DerivedFigures derived;
-  std::vector<OrderScore> order_table;
+  StructureTable table;
   model::ModelOrder order;
   double validation_fit_pct = 0.0;
   double condition_number = 0.0;  // MMFM equation matrix (NaN for SRIVC)
-  std::string std_error_method;   // "block spread (8 blocks)" or "analytic"
+  std::string std_error_method;   // "block spread (8 blocks)" or "asymptotic covariance"
   std::string settings;           // human-readable summary of what was used
   MmfmSettings mmfm_settings;
-  signal::Correlation ruu, ryu;   // correlations of the whole record
+  signal::Correlation ruu, ryu;   // correlations of the estimation data
   signal::Correlation model_ryu;  // the model's cross-correlation on ruu's lags
+  ValidationData validation;
+  // Asymptotic covariance of [a_{n-1}..a_0, b_m..b_0 (, Td)] (monic model) and the band it
+  // gives: the response with its standard deviations, and the simultaneous 95 % factor.
+  Eigen::MatrixXd covariance;
+  std::vector<FrfUncertainty> band;
+  double band_factor = 0.0;
 };
 
-// Throws std::invalid_argument (one line) for mismatched lengths, too short a record,
-// dt_s <= 0 or an inadmissible order.
+// One record. Throws std::invalid_argument (one line) for mismatched lengths, too short a
+// record, dt_s <= 0, an inadmissible order or no stable structure.
 IdentifyResult identify(const Eigen::VectorXd& u, const Eigen::VectorXd& y, double dt_s,
+                        const IdentifyOptions& options);
+
+// Estimation records and a separate validation record (means removed from each).
+IdentifyResult identify(const RecordSet& estimation, const RecordSet& validation, double dt_s,
                         const IdentifyOptions& options);
 
 }  // namespace rig::ident

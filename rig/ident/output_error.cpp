@@ -25,16 +25,18 @@ model::TransferFunction from_theta(const Eigen::VectorXd& th, int n, int m) {
 }
 
 double cost_of(const model::TransferFunction& tf, const Eigen::VectorXd& u,
-               const Eigen::VectorXd& y, double dt_s) {
+               const Eigen::VectorXd& y, double dt_s, const model::RecordStarts& starts) {
   if (!tf.is_stable() || tf.delay_s < 0.0) return std::numeric_limits<double>::infinity();
-  const double v = (y - model::simulate(tf, u, dt_s)).squaredNorm() / static_cast<double>(y.size());
+  const double v =
+      (y - model::simulate(tf, u, dt_s, starts)).squaredNorm() / static_cast<double>(y.size());
   return std::isfinite(v) ? v : std::numeric_limits<double>::infinity();
 }
 
 }  // namespace
 
 OutputErrorFit refine_output_error(const Eigen::VectorXd& u, const Eigen::VectorXd& y, double dt_s,
-                                   const model::TransferFunction& start, bool delay_free) {
+                                   const model::TransferFunction& start, bool delay_free,
+                                   const model::RecordStarts& starts) {
   if (u.size() != y.size())
     throw std::invalid_argument("refine_output_error: u and y lengths differ");
   if (!start.is_proper()) throw std::invalid_argument("refine_output_error: improper start model");
@@ -45,13 +47,13 @@ OutputErrorFit refine_output_error(const Eigen::VectorXd& u, const Eigen::Vector
   th << m0.den.tail(n), m0.num, m0.delay_s;
   OutputErrorFit fit;
   fit.model = m0;
-  double v = cost_of(m0, u, y, dt_s), lambda = 1e-3;
+  double v = cost_of(m0, u, y, dt_s, starts), lambda = 1e-3;
   fit.cost = v;
   if (!std::isfinite(v)) return fit;
   for (int it = 0; it < kMaxIterations; ++it) {
     const model::TransferFunction tf = from_theta(th, n, m);
-    const Eigen::VectorXd e = y - model::simulate(tf, u, dt_s);
-    const Eigen::MatrixXd j = output_sensitivities(tf, u, dt_s).leftCols(p);
+    const Eigen::VectorXd e = y - model::simulate(tf, u, dt_s, starts);
+    const Eigen::MatrixXd j = output_sensitivities(tf, u, dt_s, starts).leftCols(p);
     const Eigen::MatrixXd jtj = j.transpose() * j;
     const Eigen::VectorXd g = j.transpose() * e;
     bool accepted = false;
@@ -60,7 +62,7 @@ OutputErrorFit refine_output_error(const Eigen::VectorXd& u, const Eigen::Vector
       a.diagonal() += lambda * jtj.diagonal();
       Eigen::VectorXd cand = th;
       cand.head(p) += a.ldlt().solve(g);
-      const double vc = cost_of(from_theta(cand, n, m), u, y, dt_s);
+      const double vc = cost_of(from_theta(cand, n, m), u, y, dt_s, starts);
       if (vc < v) {
         accepted = true;
         const double rel = (v - vc) / v;

@@ -20,7 +20,9 @@ struct OutputErrorFit {
 
 // Throws std::invalid_argument for unequal lengths or an improper start. A start that is
 // unstable is returned unchanged (improved = false).
+// starts: several records joined end to end (model::RecordStarts; empty: one record).
 OutputErrorFit refine_output_error(const Eigen::VectorXd& u, const Eigen::VectorXd& y, double dt_s,
-                                   const model::TransferFunction& start, bool delay_free);
+                                   const model::TransferFunction& start, bool delay_free,
+                                   const model::RecordStarts& starts = {});
 
 }  // namespace rig::ident

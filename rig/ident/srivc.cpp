@@ -8,6 +8,7 @@
 #include <limits>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 namespace rig::ident {
 namespace {
@@ -45,22 +46,36 @@ struct IvStep {
   bool ok = false;
 };
 
+// Rows of the regression: every record's samples but its filters' start-up transient
+// (unknown initial conditions of the record).
+std::vector<Eigen::Index> regression_rows(Eigen::Index n, const model::RecordStarts& starts) {
+  const model::RecordStarts s = starts.empty() ? model::RecordStarts{0} : starts;
+  std::vector<Eigen::Index> rows;
+  for (std::size_t i = 0; i < s.size(); ++i) {
+    const Eigen::Index end = i + 1 < s.size() ? s[i + 1] : n;
+    const Eigen::Index skip = std::min<Eigen::Index>((end - s[i]) / 10, 200);
+    for (Eigen::Index k = s[i] + skip; k < end; ++k) rows.push_back(k);
+  }
+  return rows;
+}
+
 // One (I)V solve with prefilter 1/A; instruments from x_hat when given, else plain LS.
 IvStep iv_step(const Eigen::VectorXd& a_filter, const Eigen::VectorXd& u, const Eigen::VectorXd& y,
-               const Eigen::VectorXd* x_hat, double dt_s, model::ModelOrder order, double delay_s) {
+               const Eigen::VectorXd* x_hat, double dt_s, model::ModelOrder order, double delay_s,
+               const model::RecordStarts& starts) {
   const int n = order.n, m = order.m;
-  const Eigen::MatrixXd yf = model::filtered_derivatives(a_filter, y, dt_s, 0.0);
-  const Eigen::MatrixXd uf = model::filtered_derivatives(a_filter, u, dt_s, delay_s);
-  const Eigen::MatrixXd xf = x_hat ? model::filtered_derivatives(a_filter, *x_hat, dt_s, 0.0) : yf;
-  // Skip the filters' start-up transient (unknown initial conditions of the record).
-  const Eigen::Index skip = std::min<Eigen::Index>(y.size() / 10, 200);
-  const Eigen::Index rows = y.size() - skip;
+  const Eigen::MatrixXd yf = model::filtered_derivatives(a_filter, y, dt_s, 0.0, starts);
+  const Eigen::MatrixXd uf = model::filtered_derivatives(a_filter, u, dt_s, delay_s, starts);
+  const Eigen::MatrixXd xf =
+      x_hat ? model::filtered_derivatives(a_filter, *x_hat, dt_s, 0.0, starts) : yf;
+  const std::vector<Eigen::Index> idx = regression_rows(y.size(), starts);
+  const Eigen::Index rows = static_cast<Eigen::Index>(idx.size());
   Eigen::MatrixXd phi(rows, n + m + 1), zeta(rows, n + m + 1);
-  phi.leftCols(n) = -yf.block(skip, 1, rows, n);
-  zeta.leftCols(n) = -xf.block(skip, 1, rows, n);
-  phi.rightCols(m + 1) = uf.block(skip, n - m, rows, m + 1);
+  phi.leftCols(n) = -yf(idx, Eigen::seqN(1, n));
+  zeta.leftCols(n) = -xf(idx, Eigen::seqN(1, n));
+  phi.rightCols(m + 1) = uf(idx, Eigen::seqN(n - m, m + 1));
   zeta.rightCols(m + 1) = phi.rightCols(m + 1);
-  const Eigen::VectorXd target = yf.col(0).tail(rows);
+  const Eigen::VectorXd target = yf(idx, 0);
   const Eigen::MatrixXd zp = zeta.transpose() * phi;
   if (!zp.allFinite()) return {};
   Eigen::FullPivLU<Eigen::MatrixXd> lu(zp);
@@ -81,9 +96,9 @@ model::TransferFunction tf_from(const Eigen::VectorXd& theta, model::ModelOrder 
 }
 
 double output_sse(const model::TransferFunction& tf, const Eigen::VectorXd& u,
-                  const Eigen::VectorXd& y, double dt_s) {
+                  const Eigen::VectorXd& y, double dt_s, const model::RecordStarts& starts) {
   if (!tf.is_stable()) return std::numeric_limits<double>::infinity();
-  const double sse = (y - simulate(tf, u, dt_s)).squaredNorm();
+  const double sse = (y - simulate(tf, u, dt_s, starts)).squaredNorm();
   return std::isfinite(sse) ? sse : std::numeric_limits<double>::infinity();
 }
 
@@ -99,15 +114,15 @@ FixedDelayFit srivc_fixed(const Eigen::VectorXd& u, const Eigen::VectorXd& y, do
                           model::ModelOrder order, double delay_s, const Eigen::VectorXd& a_start,
                           const SrivcOptions& opt) {
   FixedDelayFit fit;
-  IvStep st = iv_step(a_start, u, y, nullptr, dt_s, order, delay_s);
+  IvStep st = iv_step(a_start, u, y, nullptr, dt_s, order, delay_s, opt.starts);
   if (!st.ok) return fit;
   Eigen::VectorXd theta = st.theta;
   for (int it = 1; it <= opt.max_iterations; ++it) {
     model::TransferFunction tf = tf_from(theta, order, delay_s);
     tf.den = stabilised(tf.den);
     if (tf.den.size() != order.n + 1) break;  // degenerate iterate: keep the last theta
-    const Eigen::VectorXd x_hat = simulate(tf, u, dt_s);
-    const IvStep next = iv_step(tf.den, u, y, &x_hat, dt_s, order, delay_s);
+    const Eigen::VectorXd x_hat = simulate(tf, u, dt_s, opt.starts);
+    const IvStep next = iv_step(tf.den, u, y, &x_hat, dt_s, order, delay_s, opt.starts);
     fit.iterations = it;
     if (!next.ok) break;
     const double change = (next.theta - theta).norm() / std::max(1e-300, theta.norm());
@@ -118,7 +133,7 @@ FixedDelayFit srivc_fixed(const Eigen::VectorXd& u, const Eigen::VectorXd& y, do
     }
   }
   fit.tf = tf_from(theta, order, delay_s);
-  fit.sse = output_sse(fit.tf, u, y, dt_s);
+  fit.sse = output_sse(fit.tf, u, y, dt_s, opt.starts);
   return fit;
 }
 
@@ -136,12 +151,12 @@ Eigen::VectorXd initial_denominator(const Eigen::VectorXd& u, const Eigen::Vecto
   double best_sse = std::numeric_limits<double>::infinity();
   for (double l : lambdas) {
     const Eigen::VectorXd a = svf_denominator(order.n, l);
-    const IvStep st = iv_step(a, u, y, nullptr, dt_s, order, delay_s);
+    const IvStep st = iv_step(a, u, y, nullptr, dt_s, order, delay_s, opt.starts);
     if (!st.ok) continue;
     model::TransferFunction tf = tf_from(st.theta, order, delay_s);
     tf.den = stabilised(tf.den);
     if (tf.den.size() != order.n + 1) continue;
-    const double sse = output_sse(tf, u, y, dt_s);
+    const double sse = output_sse(tf, u, y, dt_s, opt.starts);
     if (sse < best_sse) best_sse = sse, best = tf.den;
   }
   return best;
@@ -186,13 +201,13 @@ FixedDelayFit search_delay(const Eigen::VectorXd& u, const Eigen::VectorXd& y, d
 }  // namespace
 
 Eigen::MatrixXd output_sensitivities(const model::TransferFunction& tf_in, const Eigen::VectorXd& u,
-                                     double dt_s) {
+                                     double dt_s, const model::RecordStarts& starts) {
   const model::TransferFunction tf = model::monic(tf_in);
   const int n = tf.order(), m = static_cast<int>(tf.num.size()) - 1;
   // y_hat = B/A u_d: d/da_i = -p^i/A y_hat, d/db_j = p^j/A u_d, d/dTd = -p B/A u_d.
-  const Eigen::VectorXd y_hat = simulate(tf, u, dt_s);
-  const Eigen::MatrixXd xf = model::filtered_derivatives(tf.den, y_hat, dt_s, 0.0);
-  const Eigen::MatrixXd uf = model::filtered_derivatives(tf.den, u, dt_s, tf.delay_s);
+  const Eigen::VectorXd y_hat = simulate(tf, u, dt_s, starts);
+  const Eigen::MatrixXd xf = model::filtered_derivatives(tf.den, y_hat, dt_s, 0.0, starts);
+  const Eigen::MatrixXd uf = model::filtered_derivatives(tf.den, u, dt_s, tf.delay_s, starts);
   Eigen::MatrixXd j(u.size(), n + m + 2);
   j.leftCols(n) = -xf.rightCols(n);
   j.middleCols(n, m + 1) = uf.rightCols(m + 1);
@@ -206,7 +221,8 @@ Eigen::MatrixXd output_sensitivities(const model::TransferFunction& tf_in, const
     model::TransferFunction lo = tf, hi = tf;
     lo.delay_s = std::max(0.0, tf.delay_s - h);
     hi.delay_s = tf.delay_s + h;
-    j.col(n + m + 1) = (simulate(hi, u, dt_s) - simulate(lo, u, dt_s)) / (hi.delay_s - lo.delay_s);
+    j.col(n + m + 1) =
+        (simulate(hi, u, dt_s, starts) - simulate(lo, u, dt_s, starts)) / (hi.delay_s - lo.delay_s);
   }
   return j;
 }
@@ -234,9 +250,9 @@ SrivcResult estimate_srivc(const Eigen::VectorXd& u, const Eigen::VectorXd& y, d
   res.converged = best.converged;
   const Eigen::Index N = y.size(), p = order.n + order.m + 2;
   res.noise_variance = best.sse / static_cast<double>(N - p);
-  res.fit_pct = model::fit_percent(y, simulate(res.model, u, dt_s));
+  res.fit_pct = model::fit_percent(y, simulate(res.model, u, dt_s, opt.starts));
   // Output-error covariance sigma^2 (J^T J)^-1, J the output sensitivities (incl. Td).
-  const Eigen::MatrixXd jac = output_sensitivities(res.model, u, dt_s);
+  const Eigen::MatrixXd jac = output_sensitivities(res.model, u, dt_s, opt.starts);
   Eigen::MatrixXd info = jac.transpose() * jac;
   if (opt.delay_s) info.col(p - 1).setZero(), info.row(p - 1).setZero(), info(p - 1, p - 1) = 1;
   res.covariance = res.noise_variance * info.inverse();

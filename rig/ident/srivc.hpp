@@ -25,6 +25,9 @@ struct SrivcOptions {
   int max_iterations = 30;
   double tolerance = 1e-7;       // relative parameter change that ends the iteration
   double svf_cutoff_rad_s = -1;  // initial filter (p + lambda)^n; < 0: automatic
+  // Several records joined end to end (model::RecordStarts; empty: one record): each is
+  // filtered and simulated from zero state, and its filters' start-up is skipped.
+  model::RecordStarts starts;
 };
 
 struct SrivcResult {
@@ -46,6 +49,6 @@ SrivcResult estimate_srivc(const Eigen::VectorXd& u, const Eigen::VectorXd& y, d
 // Output sensitivities d y_hat / d theta for theta = [a_{n-1}..a_0, b_m..b_0, Td] of the
 // monic model tf driven by u (columns, N rows): the Jacobian of the output-error model.
 Eigen::MatrixXd output_sensitivities(const model::TransferFunction& tf, const Eigen::VectorXd& u,
-                                     double dt_s);
+                                     double dt_s, const model::RecordStarts& starts = {});
 
 }  // namespace rig::ident

@@ -78,6 +78,14 @@ Sidecar parse_sidecar(const json& doc, const std::string& source) {
     out.sample_rate_hz = positive_number(doc, "sample_rate_hz", source);
   if (doc.contains("coupling_rc_s"))
     out.coupling_rc_s = positive_number(doc, "coupling_rc_s", source);
+  if (doc.contains("y_sampled_after_s")) {
+    const json& v = doc.at("y_sampled_after_s");
+    if (!v.is_number() || !std::isfinite(v.get<double>()) || v.get<double>() < 0.0) {
+      throw InputError(source, 0, "",
+                       "key \"y_sampled_after_s\": expected a time >= 0 in s, found " + v.dump());
+    }
+    out.y_sampled_after_s = v.get<double>();
+  }
   if (doc.contains("units")) read_units(doc, source, out);
   if (doc.contains("coupled_columns")) read_coupled(doc, source, out);
   if (doc.contains("link")) out.link = text(doc, "link", source);
@@ -117,6 +125,7 @@ json to_json(const Sidecar& sidecar) {
   if (!sidecar.link.empty()) doc["link"] = sidecar.link;
   if (!sidecar.preset.empty()) doc["preset"] = sidecar.preset;
   if (sidecar.seed) doc["seed"] = *sidecar.seed;
+  if (sidecar.y_sampled_after_s) doc["y_sampled_after_s"] = *sidecar.y_sampled_after_s;
   return doc;
 }
 

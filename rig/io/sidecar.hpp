@@ -43,6 +43,9 @@ struct Sidecar {
   std::string link;
   std::string preset;
   std::optional<std::uint64_t> seed;
+  // How long after a row's u was written its y was sampled (lockstep: one sample period;
+  // real time: 0). Identified dead times refer to the plant with it (docs/decisions.md).
+  std::optional<double> y_sampled_after_s;
   nlohmann::json raw = nlohmann::json::object();  // the whole document as read
 };
 

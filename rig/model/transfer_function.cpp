@@ -6,6 +6,7 @@
 #include <stdexcept>
 #include <string>
 #include <unsupported/Eigen/MatrixFunctions>
+#include <utility>
 #include <vector>
 
 namespace rig::model {
@@ -200,6 +201,43 @@ Eigen::VectorXd simulate(const TransferFunction& tf_in, const Eigen::VectorXd& u
   Eigen::VectorXd b = Eigen::VectorXd::Zero(n + 1);
   b.tail(tf.num.size()) = tf.num;
   return filtered_derivatives(tf.den, u, dt_s, tf.delay_s) * b;
+}
+
+namespace {
+
+// [begin, end) of record i of `starts` within n samples.
+std::pair<Eigen::Index, Eigen::Index> record_span(const RecordStarts& starts, std::size_t i,
+                                                  Eigen::Index n) {
+  const Eigen::Index end = i + 1 < starts.size() ? starts[i + 1] : n;
+  if (starts[i] < 0 || end > n || end <= starts[i])
+    throw std::invalid_argument("record starts must be ascending within the signal");
+  return {starts[i], end};
+}
+
+}  // namespace
+
+Eigen::VectorXd simulate(const TransferFunction& tf, const Eigen::VectorXd& u, double dt_s,
+                         const RecordStarts& starts) {
+  if (starts.size() < 2) return simulate(tf, u, dt_s);
+  Eigen::VectorXd out(u.size());
+  for (std::size_t i = 0; i < starts.size(); ++i) {
+    const auto [b, e] = record_span(starts, i, u.size());
+    out.segment(b, e - b) = simulate(tf, u.segment(b, e - b), dt_s);
+  }
+  return out;
+}
+
+Eigen::MatrixXd filtered_derivatives(const Eigen::VectorXd& den, const Eigen::VectorXd& u,
+                                     double dt_s, double delay_s, const RecordStarts& starts) {
+  if (starts.size() < 2) return filtered_derivatives(den, u, dt_s, delay_s);
+  Eigen::MatrixXd out;
+  for (std::size_t i = 0; i < starts.size(); ++i) {
+    const auto [b, e] = record_span(starts, i, u.size());
+    const Eigen::MatrixXd part = filtered_derivatives(den, u.segment(b, e - b), dt_s, delay_s);
+    if (i == 0) out.resize(u.size(), part.cols());
+    out.middleRows(b, e - b) = part;
+  }
+  return out;
 }
 
 double fit_percent(const Eigen::VectorXd& y, const Eigen::VectorXd& yhat) {

@@ -8,6 +8,7 @@
 
 #include <Eigen/Core>
 #include <complex>
+#include <vector>
 
 namespace rig::model {
 
@@ -58,6 +59,15 @@ Eigen::VectorXd simulate(const TransferFunction& tf, const Eigen::VectorXd& u, d
 // SRIVC and the output sensitivities; simulate() is B(p) applied to them.
 Eigen::MatrixXd filtered_derivatives(const Eigen::VectorXd& den, const Eigen::VectorXd& u,
                                      double dt_s, double delay_s);
+
+// Several records joined end to end (a multi-record estimation): `starts` holds the first
+// sample of each record (ascending, the first 0; empty: one record). Each record starts from
+// zero state, as simulate() and filtered_derivatives() do for one.
+using RecordStarts = std::vector<Eigen::Index>;
+Eigen::VectorXd simulate(const TransferFunction& tf, const Eigen::VectorXd& u, double dt_s,
+                         const RecordStarts& starts);
+Eigen::MatrixXd filtered_derivatives(const Eigen::VectorXd& den, const Eigen::VectorXd& u,
+                                     double dt_s, double delay_s, const RecordStarts& starts);
 
 // Free (zero-input) responses of tf from the unit initial states of its controllable form,
 // one column each (n columns): they span every initial-condition transient of the system.

@@ -50,6 +50,19 @@ std::pair<Chart, Chart> bode_charts(const std::string& title, const std::vector<
     p.points = c.points;
     if (c.points) p.width_px = 0;
     phase.series.push_back(p);
+    if (c.phase_halfwidth_deg && c.phase_halfwidth_deg->size() == p.y.size()) {
+      Series up{c.label + " upper", p.y, "rgba(31,119,180,0.5)", true};
+      Series lo{c.label + " lower", p.y, "rgba(31,119,180,0.5)", true};
+      for (std::size_t i = 0; i < p.y.size(); ++i) {
+        up.y[i] += (*c.phase_halfwidth_deg)[i];
+        lo.y[i] -= (*c.phase_halfwidth_deg)[i];
+      }
+      up.width_px = lo.width_px = 0.5;
+      const std::size_t at = phase.series.size();
+      phase.series.push_back(up);
+      phase.series.push_back(lo);
+      phase.bands.push_back({at, at + 1});
+    }
     if (c.mag_lo && c.mag_hi) {
       const std::size_t hi = mag.series.size();
       mag.series.push_back({c.label + " upper", *c.mag_hi, "rgba(31,119,180,0.5)", true});

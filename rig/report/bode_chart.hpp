@@ -17,8 +17,9 @@ struct BodeCurve {
   std::vector<std::complex<double>> response;  // H(j 2 pi f) at the common frequencies
   std::optional<std::vector<double>> mag_lo;   // |H| bounds, drawn as a shaded band
   std::optional<std::vector<double>> mag_hi;
-  bool points = false;                         // measured FRF: markers, no line
+  bool points = false;  // measured FRF: markers, no line
   std::string color;
+  std::optional<std::vector<double>> phase_halfwidth_deg;  // +- band around the phase
 };
 
 // Magnitude (log-log) and phase (deg, unwrapped along frequency) charts.

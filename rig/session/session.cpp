@@ -40,8 +40,7 @@ io::Sidecar recording_sidecar(const SessionData& d) {
   // u and the plant answers after advancing one sample period with it; in real time the rig
   // reads the latest sample, taken before the write took effect. A model of the plant's
   // physics is aligned with the rows by this (rig diagnose; docs/decisions.md).
-  s.raw["y_sampled_after_s"] =
-      d.config.link.lockstep_ticks > 0 ? 1.0 / d.config.link.sample_rate_hz : 0.0;
+  s.y_sampled_after_s = d.config.link.lockstep_ticks > 0 ? 1.0 / d.config.link.sample_rate_hz : 0.0;
   return s;
 }
 

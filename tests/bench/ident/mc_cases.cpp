@@ -199,13 +199,14 @@ void rao_garnier_mc(const McConfig& cfg) {
 namespace {
 
 void print_order_table(const char* title, const IdentifyResult& r) {
-  std::printf(" %s: chosen %d/%d, validation fit %.2f %%, Td %.4f s\n", title, r.order.n, r.order.m,
-              r.validation_fit_pct, r.delay_s);
-  std::printf("   %-6s %10s %12s %10s %10s\n", "order", "est fit %", "valid fit %", "score",
+  std::printf(" %s: chosen %s, validation fit %.2f %%, Td %.4f s\n", title,
+              r.structure.name().c_str(), r.validation_fit_pct, r.delay_s);
+  std::printf("   %-18s %10s %12s %14s %10s\n", "structure", "est fit %", "valid fit %", "BIC",
               "Td (s)");
-  for (const OrderScore& s : r.order_table)
-    std::printf("   %d/%-4d %10.2f %12.2f %10.2f %10.4f\n", s.order.n, s.order.m, s.fit_pct,
-                s.validation_fit_pct, s.score, s.delay_s);
+  for (const StructureFit& s : r.table.rows)
+    std::printf("   %-18s %10.2f %12.2f %14.1f %10.4f%s\n", s.structure.name().c_str(),
+                s.estimation_fit_pct, s.validation_fit_pct, s.bic, s.model.delay_s,
+                s.adequate ? " adequate" : "");
 }
 
 }  // namespace
@@ -213,15 +214,15 @@ void print_order_table(const char* title, const IdentifyResult& r) {
 void order_tables(const McConfig& cfg) {
   std::printf(
       "\n== Model-order selection (seed 001 style): estimate on the first half, "
-      "validate on the second, score = validation fit - 0.1 %% per parameter; "
+      "validate on the second, the simplest structure within %.1f points of the best; "
       "seed %llu ==\n",
-      static_cast<unsigned long long>(cfg.seed));
+      kAdequacyMarginPct, static_cast<unsigned long long>(cfg.seed));
   const auto st = experiments::stornoway_record(cfg.seed, cfg.minutes);
   IdentifyOptions io;
   io.correlator.lags = cfg.lags;
   io.blocks = 0;
   print_order_table("Stornoway, SNR 0 dB, MMFM", identify(st.u, st.y, st.dt_s, io));
-  io.method = IdentMethod::kSrivc;
+  io.methods = {IdentMethod::kSrivc};
   io.max_delay_s = 0.3;
   print_order_table("Stornoway, SNR 0 dB, SRIVC", identify(st.u, st.y, st.dt_s, io));
   const auto rg = experiments::rao_garnier_record(cfg.seed, 2 * 2047 * 3);
@@ -232,7 +233,7 @@ void order_tables(const McConfig& cfg) {
   ir.delay_s = 0.0;
   print_order_table("Rao-Garnier, SNR 10 dB, MMFM (Td = 0 known)",
                     identify(rg.u, rg.y, rg.dt_s, ir));
-  ir.method = IdentMethod::kSrivc;
+  ir.methods = {IdentMethod::kSrivc};
   print_order_table("Rao-Garnier, SNR 10 dB, SRIVC (Td = 0 known)",
                     identify(rg.u, rg.y, rg.dt_s, ir));
 }

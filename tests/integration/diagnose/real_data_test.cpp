@@ -60,7 +60,7 @@ Series load(const fs::path& root, const RealCase& c) {
 // identify()'s data-quality gate is the CLI's and is not applied here.
 rig::ident::IdentifyResult fit_linear(const Series& s) {
   rig::ident::IdentifyOptions io;
-  io.method = rig::ident::IdentMethod::kMmfm;
+  io.methods = {rig::ident::IdentMethod::kMmfm};
   io.correlator.lags = std::min<Eigen::Index>(256, s.u.size() / 8);
   return rig::ident::identify(s.u, s.y, s.dt_s, io);
 }

@@ -81,7 +81,7 @@ TEST(IdentifyCli, RecoversSecondOrderPlantWithDeadTime) {
   EXPECT_EQ(model["den"].size(), 3u);
   EXPECT_EQ(model["units"]["output"], "kW");
   const std::string html = testing::slurp(dir / "out" / "report.html");
-  EXPECT_NE(html.find("data-charts-expected=\"4\""), std::string::npos);
+  EXPECT_NE(html.find("data-charts-expected=\"8\""), std::string::npos);
   EXPECT_EQ(nlohmann::json::parse(testing::slurp(dir / "out" / "report.json")), rep);
 }
 

@@ -48,22 +48,31 @@ TEST(Identify, SelectsSecondOrderForStornoway) {
   io.correlator.lags = 512;
   io.blocks = 0;
   const IdentifyResult r = identify(rec.u, rec.y, rec.dt_s, io);
-  ASSERT_EQ(r.order_table.size(), io.candidates.size());
+  // Orders 1..6 with every numerator order below, each with and without a dead time.
+  ASSERT_EQ(r.table.rows.size(), 2u * 21u);
   EXPECT_EQ(r.order.n, 2);
   EXPECT_EQ(r.order.m, 0);
+  EXPECT_TRUE(r.structure.delay_estimated);
   double first_order_fit = 0.0;
-  for (const OrderScore& s : r.order_table)
-    if (s.order.n == 1) first_order_fit = s.validation_fit_pct;
+  for (const StructureFit& s : r.table.rows)
+    if (s.structure.order.n == 1 && s.ok)
+      first_order_fit = std::max(first_order_fit, s.validation_fit_pct);
   EXPECT_LT(first_order_fit, r.validation_fit_pct - 5.0);
   // SNR 10 dB bounds the achievable fit: 100 (1 - sqrt(0.1 / 1.1)) = 69.8 %.
   EXPECT_NEAR(r.validation_fit_pct, 69.8, 1.5);
-  EXPECT_EQ(r.std_error_method, "analytic");
+  EXPECT_EQ(r.std_error_method, "asymptotic covariance");
+  // The chosen structure is adequate and no adequate one has fewer parameters.
+  ASSERT_NE(r.table.chosen_fit(), nullptr);
+  for (const StructureFit& s : r.table.rows)
+    if (s.adequate) {
+      EXPECT_GE(s.structure.parameters(), r.structure.parameters());
+    }
 }
 
 TEST(Identify, SrivcPathAndGivenDelay) {
   const auto rec = experiments::stornoway_record(41, 2.0);
   IdentifyOptions io;
-  io.method = IdentMethod::kSrivc;
+  io.methods = {IdentMethod::kSrivc};
   io.order = model::ModelOrder{2, 0};
   io.delay_s = 0.06;
   const IdentifyResult r = identify(rec.u, rec.y, rec.dt_s, io);

@@ -58,7 +58,7 @@ TEST(SrivcDegenerate, DryerRecordAutomaticOrderAndDelay) {
   const Eigen::VectorXd y =
       Eigen::Map<Eigen::VectorXd>(yv.data(), static_cast<Eigen::Index>(yv.size()));
   IdentifyOptions opt;
-  opt.method = IdentMethod::kSrivc;
+  opt.methods = {IdentMethod::kSrivc};
   opt.correlator.lags = 125;  // min(256, N / 8), as rig identify chooses
   const IdentifyResult r = identify(u, y, 0.08, opt);
   std::printf("dryer SRIVC: order %d/%d, delay %.4f s, validation fit %.2f %%\n", r.order.n,

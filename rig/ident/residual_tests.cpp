@@ -6,12 +6,12 @@
 // unmodelled dynamics; a coloured residual uncorrelated with u is a disturbance. Over 2M+1
 // lags the family-wise 1 % threshold is z = Phi^-1(1 - 0.005 / (2M+1)), i.e. the per-lag
 // ratio to the 99 % bound must stay below z / 2.58.
+#include "rig/ident/residual_tests.hpp"
+
 #include <algorithm>
 #include <cmath>
 
-#include "rig/diagnose/locate.hpp"
-
-namespace rig::diagnose {
+namespace rig::ident {
 namespace {
 
 // Phi^-1(p) for p in (0.5, 1) by bisection on erfc (accurate enough for a threshold).
@@ -67,4 +67,4 @@ ResidualTests residual_tests(const Eigen::VectorXd& r_in, const Eigen::VectorXd&
   return t;
 }
 
-}  // namespace rig::diagnose
+}  // namespace rig::ident
