@@ -17,7 +17,9 @@ void add_session_options(CLI::App& cmd, SessionArgs& a) {
   cmd.add_option("--out", a.out_dir, "Output folder (must be new or empty, see --force)")
       ->required();
   cmd.add_flag("--emulate", a.emulate, "Start plantsim (see --clock) and test against it");
-  cmd.add_option("--preset", a.preset, "Emulated plant preset")->default_str("stornoway");
+  cmd.add_option("--preset", a.preset,
+                 "Emulated plant: a preset name, or a plant TOML (plantsim --list-params "
+                 "writes one to edit)")->default_str("stornoway");
   cmd.add_option("--seed", a.seed, "Emulated plant noise seed")->default_str("1");
   cmd.add_option("--link-type", a.link_type, "Emulated link: modbus+tcp, can+udp, modbus+rtu")
       ->default_str("modbus+tcp");

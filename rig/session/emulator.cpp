@@ -93,9 +93,16 @@ void EmulatedPlant::start_socat(const std::filesystem::path& dir) {
 }
 
 EmulatedPlant::EmulatedPlant(const EmulatorOptions& o) {
-  std::vector<std::string> args = {
-      o.plantsim.string(),    "--preset", o.preset, "--seed",
-      std::to_string(o.seed), "--clock",  o.clock,  "--exit-with-parent"};
+  // A plant TOML (e.g. plantsim --list-params edited to another load) or a preset name.
+  const bool toml = o.preset.size() > 5 && o.preset.ends_with(".toml");
+  std::vector<std::string> args = {o.plantsim.string(),
+                                   toml ? "--config" : "--preset",
+                                   o.preset,
+                                   "--seed",
+                                   std::to_string(o.seed),
+                                   "--clock",
+                                   o.clock,
+                                   "--exit-with-parent"};
   if (o.link_type == "modbus+tcp") {
     args.insert(args.end(), {"--modbus", "tcp://127.0.0.1:0"});
   } else if (o.link_type == "can+udp") {

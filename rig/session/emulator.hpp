@@ -21,7 +21,7 @@ struct EmulatorError : std::runtime_error {
 
 struct EmulatorOptions {
   std::filesystem::path plantsim;  // the executable
-  std::string preset = "stornoway";
+  std::string preset = "stornoway";  // a preset name, or a plant TOML (NAME.toml)
   std::uint64_t seed = 1;
   std::string link_type = "modbus+tcp";  // modbus+tcp | can+udp | modbus+rtu
   std::string clock = "lockstep";        // plantsim --clock: lockstep | realtime
