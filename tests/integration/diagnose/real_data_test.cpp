@@ -56,7 +56,7 @@ Series load(const fs::path& root, const RealCase& c) {
   return load(root / c.file, c.in, c.out, c.dt_s, c.from, c.to);
 }
 
-// The model `rig identify` writes (MMFM, automatic order and delay, default lag window);
+// The model `rig identify --method mmfm` writes (automatic order and delay, default lag window);
 // identify()'s data-quality gate is the CLI's and is not applied here.
 rig::ident::IdentifyResult fit_linear(const Series& s) {
   rig::ident::IdentifyOptions io;
