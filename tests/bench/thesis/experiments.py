@@ -171,8 +171,7 @@ def noise_free_record(ctx):
     held = np.repeat(u, FIG59_SUBSTEPS)
     t = np.arange(len(held)) / fast
     os.makedirs(os.path.join(ctx.out, 'fig59'), exist_ok=True)
-    power = R.replay(ctx.plantsim, R.plant_toml(ctx.plantsim, ctx.out, STORNOWAY_KW), t, held,
-                     os.path.join(ctx.out, 'fig59'), 'replay')
+    power = R.replay(ctx.plantsim, R.plant_toml(ctx.plantsim, ctx.out, STORNOWAY_KW), t, held)
     y = np.asarray(power)[::FIG59_SUBSTEPS]
     dt = 1 / S.SAMPLE_RATE_HZ
     return A.ac_couple(u, dt, S.AC_RC_S), A.ac_couple(y, dt, S.AC_RC_S)
@@ -213,7 +212,7 @@ def static_curve(ctx, lin):
         per = int(round(STATIC_HOLD_S / STATIC_DT_S))
         bias = [lv for lv in levels for _ in range(per)]
         t = [k * STATIC_DT_S for k in range(len(bias))]
-        power = np.asarray(R.replay(ctx.plantsim, cfg, t, bias, ctx.out, f'static_{kw}'))
+        power = np.asarray(R.replay(ctx.plantsim, cfg, t, bias))
         tail = int(round(STATIC_AVERAGE_S / STATIC_DT_S))
         settled = [float(power[(i + 1) * per - tail:(i + 1) * per].mean())
                    for i in range(len(levels))]

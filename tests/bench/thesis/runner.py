@@ -2,7 +2,7 @@
 (lockstep clock, a plant TOML for the operating point), `rig commission --link` against it,
 `rig identify` on a recording, `plantsim --replay` and `--linearise`. One process pair at a
 time, under `nice`, so the reproduction leaves the machine usable."""
-import csv, json, os, re, shutil, subprocess, sys, time
+import csv, json, os, re, shutil, subprocess, sys, tempfile, time
 
 NICE = ['nice', '-n', '10']
 PLANT_TICK_S = 0.001         # plantsim's default tick; lockstep_ticks = sample period / tick
@@ -110,17 +110,18 @@ def wait_ready(plant):
     raise RuntimeError('plantsim did not report its Modbus endpoint')
 
 
-def identify(rig, recording, out_dir, order='2/0', delay='auto', lags=None, skip=None,
-             rows='all'):
-    """rig identify (MMFM) on a CSV; the parsed report.json, or None on a failed check."""
-    cmd = NICE + [rig, 'identify', '--recording', recording, '--order', order, '--delay',
-                  str(delay), '--method', 'mmfm', '--rows', rows, '--out', out_dir, '--force',
-                  '--json']
-    if lags:
-        cmd += ['--lags', str(lags)]
-    if skip:
-        cmd += ['--skip', str(skip)]
-    res = subprocess.run(cmd, capture_output=True, text=True)
+def identify(rig, recording, order='2/0', delay='auto', lags=None, skip=None, rows='all'):
+    """rig identify (MMFM) on a CSV; the parsed report.json (its files are not kept), or
+    None when it gave no model (a failed check, or no stable model)."""
+    with tempfile.TemporaryDirectory(prefix='thesis-id-') as out_dir:
+        cmd = NICE + [rig, 'identify', '--recording', recording, '--order', order, '--delay',
+                      str(delay), '--method', 'mmfm', '--rows', rows, '--out', out_dir,
+                      '--force', '--json']
+        if lags:
+            cmd += ['--lags', str(lags)]
+        if skip:
+            cmd += ['--skip', str(skip)]
+        res = subprocess.run(cmd, capture_output=True, text=True)
     if res.returncode != 0 or not res.stdout.strip():
         return None
     return json.loads(res.stdout)
@@ -152,18 +153,18 @@ def write_recording(path, t, u, y, sidecar=None):
             json.dump(doc, fh)
 
 
-def replay(plantsim, plant_cfg, t, bias, out_dir, name):
+def replay(plantsim, plant_cfg, t, bias):
     """plantsim --replay: the bias through the plant without noise; returns the power."""
-    src = os.path.join(out_dir, name + '_in.csv')
-    dst = os.path.join(out_dir, name + '_out.csv')
-    with open(src, 'w') as fh:
-        fh.write('t,u\n')
-        for a, b in zip(t, bias):
-            fh.write(f'{a:.6f},{b:.9g}\n')
-    subprocess.run(NICE + [plantsim, '--config', plant_cfg, '--replay', src, '--replay-out', dst],
-                   check=True, capture_output=True)
-    with open(dst) as fh:
-        return [float(r['power_kw']) for r in csv.DictReader(fh)]
+    with tempfile.TemporaryDirectory(prefix='thesis-replay-') as tmp:
+        src, dst = os.path.join(tmp, 'in.csv'), os.path.join(tmp, 'out.csv')
+        with open(src, 'w') as fh:
+            fh.write('t,u\n')
+            for a, b in zip(t, bias):
+                fh.write(f'{a:.6f},{b:.9g}\n')
+        subprocess.run(NICE + [plantsim, '--config', plant_cfg, '--replay', src,
+                               '--replay-out', dst], check=True, capture_output=True)
+        with open(dst) as fh:
+            return [float(r['power_kw']) for r in csv.DictReader(fh)]
 
 
 def which(path):

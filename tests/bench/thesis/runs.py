@@ -87,11 +87,9 @@ def run(ctx, load_kw, kind, plan_fraction, seed, tag, prefixes=(), per_block=Fal
     r = A.cross_correlations(u, y, LAGS, BLOCK, SKIP)
     res['corr_noise'] = A.correlation_noise(r, float(np.var(u)))
     res['corr_mean'] = (r.mean(axis=0) / float(np.var(u))).tolist()
-    if keep:
-        res['record'] = write(out, 'coupled', u, y)
-        res['timing_shift_s'] = shift
-    else:
-        os.remove(os.path.join(out, 'rig', 'recording.csv'))
+    if not keep:  # the report.json stays; the recording and the page are 4-5 MB a run
+        for name in ('recording.csv', 'report.html'):
+            os.remove(os.path.join(out, 'rig', name))
     return res
 
 
@@ -133,8 +131,7 @@ def identify(ctx, u, y, out, name, shift, delay='auto'):
         k = math.ceil(-fixed * SAMPLE_RATE_HZ)
         u, y, fixed = u[:-k], y[k:], fixed + k / SAMPLE_RATE_HZ
     path = write(out, name, u, y)
-    rep = R.identify(ctx.rig, path, os.path.join(out, 'id_' + name), delay=fixed, lags=LAGS,
-                     skip=SKIP)
+    rep = R.identify(ctx.rig, path, delay=fixed, lags=LAGS, skip=SKIP)
     os.remove(path)
     if not rep:
         return None

@@ -52,7 +52,13 @@ def stornoway(e):
                                          for src in ('online', 'mmfm')
                                          for k in ('q1_q2', 'q0_q2', 'delay_s')]
            for n in lengths])
-    return [t1, t2, t3]
+    t4 = ('q2, q1, q0 of the thesis\'s method against record length: half-range / mean over '
+          'runs, beside the thesis\'s range over its runs',
+          ['blocks', 'seconds', 'q2', 'q1', 'q0'],
+          [[n, f(n * 2048 / 31.25, 4)] + [rel(e['vs_length']['mmfm'][n][k]['rel_half_range'])
+                                         for k in ('q2', 'q1', 'q0')] for n in lengths] +
+          [['thesis', '-'] + [rel(e['thesis_rel'][k]) for k in ('q2', 'q1', 'q0')]])
+    return [t1, t2, t3, t4]
 
 
 def loads(e):
@@ -78,7 +84,8 @@ def loads(e):
         for k in ('fn_hz', 'zeta', 'gain', 'delay_s'):
             cols = [verdict(d[src][k]) for src in ('online', 'mmfm')]
             ln = pct(d['linearisation'][k], 2) if 'linearisation' in d else '-'
-            diffs[2].append([d['what'], f'{d["a"]} -> {d["b"]}', NAMES[k]] + cols + [ln])
+            pair = f'{d["a"][0]} kW {d["a"][1]} -> {d["b"][0]} kW {d["b"][1]}'
+            diffs[2].append([d['what'], pair, NAMES[k]] + cols + [ln])
     return [cells, diffs]
 
 
@@ -108,10 +115,15 @@ def table52(e):
                                            for k in RATIO_KEYS])
     rows.append([f'sd / mean over runs of {e["record_blocks"]} blocks'] +
                 [rel(a[k]['rel_sd']) for k in RATIO_KEYS])
+    q = ('The q\'s relative spread: single blocks against averaged records and the thesis',
+         ['q', 'blocks: sd / mean', 'blocks: half-range / mean',
+          f'{e["record_blocks"]}-block runs: sd / mean', 'thesis: half-range / mid'],
+         [[k, rel(s[k]['rel_sd']), rel(s[k]['rel_half_range']), rel(a[k]['rel_sd']),
+           rel(A.thesis_rel_spread()[k])] for k in ('q2', 'q1', 'q0')])
     return [(f'Table 5-2 analogue: non-averaged block estimates (seed {e["seed"]}, '
              f'{len(e["blocks"])} blocks, first 10 shown; {e["failed"]} gave no stable model; '
              'the thesis\'s own table is not legible in the scanned text)',
-             ['block'] + [NAMES[k] for k in RATIO_KEYS], rows)]
+             ['block'] + [NAMES[k] for k in RATIO_KEYS], rows), q]
 
 
 def fig59(e):
