@@ -1,8 +1,6 @@
 """thesis.html: the tables and inline SVG plots, self-contained (no scripts, works offline)."""
 import html, math
 
-import tables as T
-
 W, H, PAD_L, PAD_R, PAD_T, PAD_B = 600, 300, 64, 180, 16, 40
 COLOURS = ('#1f77b4', '#d62728', '#2ca02c', '#ff7f0e', '#9467bd', '#8c564b', '#17becf')
 STYLE = """body{font-family:sans-serif;max-width:1100px;margin:1em auto;color:#222}

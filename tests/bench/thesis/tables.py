@@ -32,7 +32,7 @@ def mean_sd(s, key):
 def stornoway(e):
     th, tr = e['thesis'], A.THESIS_Q
     t1 = ('Stornoway parameters, relative spread over runs (unit-free)',
-          ['q', 'thesis range', 'thesis half-range / mid', f'online: half-range / mean',
+          ['q', 'thesis range', 'thesis half-range / mid', 'online: half-range / mean',
            'online: sd / mean', 'MMFM: half-range / mean', 'MMFM: sd / mean'],
           [[k, f'{tr[k][1]}-{tr[k][2]}', rel(e['thesis_rel'][k]),
             rel(e['online'][k]['rel_half_range']), rel(e['online'][k]['rel_sd']),
