@@ -55,7 +55,7 @@ def parse():
     p.add_argument('--plantsim', help='default: beside --rig')
     p.add_argument('--runs', type=int, help='experiment 1 runs (default 20, quick 4)')
     p.add_argument('--quick', action='store_true',
-                   help='smoke test: 4 runs of 10 blocks, 2 per cell (about 2 minutes)')
+                   help='smoke test: 4 runs of 10 blocks, 2 per cell (under a minute)')
     p.add_argument('--out', default='out/thesis')
     p.add_argument('--seed', type=int, default=1, help='first seed (plant noise and excitation)')
     a = p.parse_args()
