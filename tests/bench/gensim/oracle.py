@@ -14,8 +14,11 @@ offset fitted on the estimation blocks, NRMSE fit of DESIGN.md 5 on the validati
   * pairs: both, on a 2-D grid.
 
 Detectable when the true structure gains >= MIN_GAIN points of validation fit over the
-nominal model AND an F test of the validation residuals says so at ALPHA, with the
-degrees of freedom of the coloured residual (Bartlett: N / (1 + 2 sum rho_k^2)).
+nominal model AND an F test of the validation residuals says so at ALPHA, both residuals
+prewhitened by an AR(AR_ORDER) model of the true structure's residual (the noise is
+coloured: transducer lag, grid wander, drift). A drift has no out-of-block prediction
+(15 s blocks, a 60 s wander): its cosine series is fitted on all blocks (in-sample, as the
+rig's own drift smoother is) and its terms count in the F test.
 """
 import math
 
@@ -31,7 +34,8 @@ FACTORS = (0.5, 0.8, 1.0, 1.25, 1.6)
 PAIR_FACTORS = (0.7, 1.0, 1.4)
 MIN_GAIN = 1.0       # points of validation fit: below this no engineer calls it an effect
 ALPHA = 1e-3         # F-test level (the rig's own tests are at 1e-2 .. 1e-4)
-ACF_LAGS = 200       # 2 s of lags for the residual's effective sample count
+AR_ORDER = 20        # prewhitening: 0.2 s of the residual's own memory
+DRIFT_TERMS_PER_TAU = 4  # cosine terms per drift time constant over the record
 
 
 def _candidates(name, value, scales):
@@ -58,11 +62,13 @@ def _blocks(n):
     return est, val
 
 
-def _fit(y, yhat, est, val, extra=None):
-    """Offset (+ extra regressors) fitted on est; returns (est fit, val fit, val residual)."""
+def _fit(y, yhat, est, val, extra=None, in_sample=False):
+    """Offset (+ extra regressors) fitted on est (on est and val: in_sample); returns
+    (est fit, val fit, val residual)."""
     cols = [np.ones_like(y)] + ([] if extra is None else list(extra))
     x = np.column_stack(cols)
-    coef, *_ = np.linalg.lstsq(x[est], (y - yhat)[est], rcond=None)
+    on = est | val if in_sample else est
+    coef, *_ = np.linalg.lstsq(x[on], (y - yhat)[on], rcond=None)
     r = y - yhat - x @ coef
 
     def nrmse(mask):
@@ -77,15 +83,20 @@ def _disturbance_regressors(name, n, onset_s):
     if name == "periodic_disturbance":
         f = fx.EFFECTS[name].truth(0, None)
         return [on * np.cos(2 * math.pi * f * t), on * np.sin(2 * math.pi * f * t)]
-    k = int(math.ceil(2 * n * g.DT / g.NOMINAL["drift_tau_s"]))
+    k = int(math.ceil(DRIFT_TERMS_PER_TAU * n * g.DT / g.NOMINAL["drift_tau_s"]))
     return [on * np.cos(math.pi * j * (t + 0.5 * g.DT) / (n * g.DT)) for j in range(1, k + 1)]
 
 
-def _neff(r):
-    r = r - r.mean()
-    c = np.correlate(r[: min(len(r), 4000)], r[: min(len(r), 4000)], "full")
-    c = c[len(c) // 2:] / c[len(c) // 2]
-    return len(r) / (1.0 + 2.0 * np.sum(c[1:ACF_LAGS] ** 2))
+def _whiten(r1, r0):
+    """Both residuals through the AR(AR_ORDER) whitening filter of r1 (least squares)."""
+    m = AR_ORDER
+    x = np.column_stack([r1[m - i - 1:len(r1) - i - 1] for i in range(m)])
+    a, *_ = np.linalg.lstsq(x, r1[m:], rcond=None)
+
+    def filt(r):
+        xx = np.column_stack([r[m - i - 1:len(r) - i - 1] for i in range(m)])
+        return r[m:] - xx @ a
+    return filt(r1), filt(r0)
 
 
 def plan(case):
@@ -140,14 +151,16 @@ def judge(case, y_all):
     nom_col = next(j for j, c in enumerate(combos, 1) if all(is_nom for _, _, is_nom in c))
     e0, v0, r0 = _fit(y, y_all[:, nom_col], est, val)
     best = None
+    in_sample = "drift" in dist
     for j, combo in enumerate(combos, 1):
-        ef, vf, r = _fit(y, y_all[:, j], est, val, extra or None)
+        ef, vf, r = _fit(y, y_all[:, j], est, val, extra or None, in_sample)
         if best is None or ef > best[0]:
             best = (ef, vf, r, combo)
     _, v1, r1, combo = best
     k = sum(1 for t in case["truths"] if t["effect"] not in fx.DISTURBANCES) + len(extra)
-    ss0, ss1 = float(np.sum(r0 ** 2)), float(np.sum(r1 ** 2))
-    neff = _neff(r1)
+    w1, w0 = _whiten(r1, r0)
+    ss0, ss1 = float(np.sum(w0 ** 2)), float(np.sum(w1 ** 2))
+    neff = len(w1)
     if not case["truths"]:
         fstat, pval = 0.0, 1.0
     else:

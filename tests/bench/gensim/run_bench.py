@@ -101,7 +101,7 @@ def run_case(spec, rig, work):
 
 
 PLANT_LINE = re.compile(r"^\s+(\S+)\s+seed\s+(\d+)\s+(\S+)\s+->\s+(\S+)\s+(ok |BAD)\s+truth\s+(\S+)"
-                        r"\s+err\s+(\S+) %\s+vfit\s+(\S+) ->\s+(\S+) %")
+                        r"\s+err\s+(\S+)\s+%\s+vfit\s+(\S+)\s+->\s+(\S+)\s+%")
 
 
 def plant_rows(text):
