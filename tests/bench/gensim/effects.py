@@ -82,24 +82,26 @@ def _swing_zeta(d_g):
 
 def _shaft_hz(k_s):
     ms = modes(g.with_params(k_s=k_s, c_s=RES_C_S))
-    return max(ms, key=lambda m: -m[1])[0]  # the least damped one is the shaft mode now
+    guess = SHAFT_HZ * math.sqrt(k_s / N0["k_s"])  # the mode scales with sqrt(stiffness)
+    return min(ms, key=lambda m: abs(m[0] - guess))[0]
 
 
-RES_C_S = 4.0          # a worn flexible coupling: damping 25 -> 4 pu (mode damping ~0.05)
+N0 = g.NOMINAL
+RES_C_S = 2.0          # a worn flexible coupling: damping 25 -> 2 pu (mode damping 0.07-0.05)
+SHAFT_HZ = 14.2        # the nominal shaft mode
 RIPPLE_KW = {"large": 5.0, "small": 2.0}  # power ripple amplitude at the sensor
 
 
 def _ripple_pu(kw):
-    """Torque ripple (pu) giving kw of power ripple at the half order (the torque -> power
-    path's gain there, from the linearised set: the same as bias -> power divided by the
-    bias -> torque path is not needed: use a short deterministic run instead)."""
-    return kw / RIPPLE_GAIN_KW_PER_PU
+    """Torque ripple amplitude (pu) giving kw of power ripple at the transducer."""
+    return kw / calibrate_ripple()
 
 
-RIPPLE_GAIN_KW_PER_PU = None  # set by calibrate_ripple()
+RIPPLE_GAIN_KW_PER_PU = None  # kW of power ripple per pu of torque ripple
 
 
 def calibrate_ripple():
+    """Measured once on a deterministic 4 s run (the shaft and swing filter the ripple)."""
     global RIPPLE_GAIN_KW_PER_PU
     if RIPPLE_GAIN_KW_PER_PU is None:
         p = g.with_params(ripple_pu=0.01)
@@ -109,7 +111,6 @@ def calibrate_ripple():
     return RIPPLE_GAIN_KW_PER_PU
 
 
-N0 = g.NOMINAL
 EFFECTS = {e.name: e for e in [
     Effect("dead_time", "fuel transport (injection) delay", "t_d", "s",
            {"large": lambda s: N0["t_d"] + 0.030, "small": lambda s: N0["t_d"] + 0.012},
@@ -144,8 +145,8 @@ EFFECTS = {e.name: e for e in [
            {"large": lambda s: 0.6, "small": lambda s: 0.25}, None, ""),
     Effect("resonance", "shaft torsional mode in the band (worn flexible coupling)", "k_s",
            "pu torque/rad",
-           {"large": lambda s: N0["k_s"] * (6.0 / 14.2) ** 2,
-            "small": lambda s: N0["k_s"] * (9.0 / 14.2) ** 2},
+           {"large": lambda s: N0["k_s"] * (4.5 / 14.2) ** 2,
+            "small": lambda s: N0["k_s"] * (7.0 / 14.2) ** 2},
            lambda v, s: _shaft_hz(v), "freq_hz", (), {"c_s": RES_C_S}),
     Effect("load_damping", "alternator damping (damper windings)", "d_g", "pu torque/pu slip",
            {"large": lambda s: 2.0 * N0["d_g"], "small": lambda s: 1.4 * N0["d_g"]},

@@ -183,7 +183,8 @@ def simulate(u, p, seed=0, onset_s=None, p_after=None, deterministic=False, sett
     for k in range(n):
         t_rec = (k - n_settle) * DT
         if p_after is not None and onset_s is not None and t_rec >= onset_s and q is p:
-            q = p_after  # the steady state of q is not re-solved: the change is abrupt
+            q = p_after  # abrupt; the shaft keeps its torque (a coupling's stiffness
+            x[ITH] = x[ITH] * np.asarray(p["k_s"], float) / np.asarray(q["k_s"], float)  # changes)
         # sample before the row's bias acts
         level = q["p_rated_kw"] * q["gain"] * x[IXM]
         level = level + q["drift_kw"] * drift[k] + q["noise_kw"] * meas_noise[k]

@@ -125,6 +125,11 @@ def plan(case):
         p = {k: np.full(ncol, v, float) if k in keys else v for k, v in src.items()}
         for k, v in det.items():
             p[k][1:] = v
+        for t in case["truths"]:  # a disturbance is the oracle's regressor, not simulated
+            if t["effect"] in fx.DISTURBANCES:
+                key = fx.EFFECTS[t["effect"]].key
+                p[key] = np.full(ncol, src[key], float)
+                p[key][1:] = g.NOMINAL[key]
         if with_effects:
             for j, combo in enumerate(combos, start=1):
                 for t, v, is_nom in combo:

@@ -13,9 +13,10 @@ With --plant-bench the plantsim benchmark runs too and its cases get the same ta
 (plantsim has no oracle: every case counts as detectable there).
 
 Right: the verdict names the true effect (extra_lag and sensor_lag count as one, as in the
-plantsim benchmark: the transducer noise enters after both lags in neither set; hysteresis
-is also right as backlash, the vocabulary's nearest fitted word); a pair when both are
-named; `effect+drift` is right behind the drift concealment (the drift is really there).
+plantsim benchmark; hysteresis is also right as backlash, the vocabulary's nearest fitted
+word); a pair when the chosen hypothesis holds both and nothing else (a pair's verdict names
+its input-side effect only); `effect+drift` is right behind the drift concealment (the drift
+is really there).
 """
 import argparse
 import json
@@ -40,11 +41,16 @@ def norm(name):
     return fx.lag_class(name)
 
 
-def is_right(truth_effect, verdict, concealment):
+def is_right(truth_effect, verdict, concealment, named=()):
+    """named: the chosen hypothesis's effects (a pair's verdict names its input-side effect
+    only, "the disturbance listed with it"): a pair is scored on them, a single on the verdict
+    as in the plantsim benchmark."""
     if truth_effect == "none":
         return verdict == "none"
     want = {norm(e) for e in truth_effect.split("+")}
     got = {norm(e) for e in verdict.split("+")}
+    if len(want) > 1 and verdict in named:
+        got = {norm(e) for e in named}
     if concealment == "drift" and "drift" not in want:
         got.discard("drift")
     if "hysteresis" in want and "backlash" in got:
@@ -53,14 +59,18 @@ def is_right(truth_effect, verdict, concealment):
 
 
 def param_errors(case, report):
-    """Error (%) of the rig's parameter of each true effect it named, where comparable."""
+    """Error (%) of the rig's parameter of each true effect its verdict names, where
+    comparable (a chosen pair may carry an effect the verdict does not name)."""
     out = {}
     ch = report.get("chosen")
     if ch is None:
         return out
     hyp = report["hypotheses"][ch]
+    named = {norm(v) for v in report["verdict"].split("+")}
+    if len(case["truths"]) > 1:
+        named |= {norm(e["effect"]) for e in hyp.get("effects", [])}
     for t in case["truths"]:
-        if t["truth"] is None:
+        if t["truth"] is None or norm(t["effect"]) not in named:
             continue
         for e in hyp.get("effects", []):
             if norm(e["effect"]) == norm(t["effect"]) and t["rig_param"] in e["params"]:
@@ -95,8 +105,10 @@ def run_case(spec, rig, work):
         row["vfit_before"] = h["validation_fit_before"] if h else rep.get("validation_fit_before")
         row["vfit_after"] = h["validation_fit_after"] if h else None
         row["params"] = h["params"] if h else {}
+        row["named"] = [e["effect"] for e in h.get("effects", [])] if h else []
         row["param_err_pct"] = param_errors(case, rep)
-    row["right"] = is_right(spec["effect"], row["verdict"], spec["concealment"])
+    row["right"] = is_right(spec["effect"], row["verdict"], spec["concealment"],
+                            row.get("named", ()))
     return row
 
 
@@ -147,6 +159,18 @@ def tables(rows, title):
             kinds[r["verdict"] if r["verdict"] in ("none", "unexplained") else "other effect"] += 1
         print(f"  {con:<10} {sum(r['right'] for r in det):>2}/{len(det):<2} of {len(rs):<2} | "
               + " ".join(f"{k}:{v}" for k, v in kinds.items()))
+    cons = [c for c in cs.CONCEALMENTS + ("pair",) if any(r["concealment"] == c for r in rows)]
+    cons += sorted({r["concealment"] for r in eff_rows} - set(cons))
+    print("effect x concealment (right/detectable; '.' none detectable, blank: no case):")
+    print(" " * 40 + "".join(f"{c[:9]:>10}" for c in cons))
+    for eff in sorted({r["effect"] for r in eff_rows}):
+        cells = []
+        for c in cons:
+            rs = [r for r in eff_rows if r["effect"] == eff and r["concealment"] == c]
+            det = [r for r in rs if r["oracle"]["detectable"]]
+            cells.append("" if not rs else "." if not det else
+                         f"{sum(r['right'] for r in det)}/{len(det)}")
+        print(f"  {eff:<38}" + "".join(f"{x:>10}" for x in cells))
     for con in sorted({r["concealment"] for r in nulls}):
         rs = [r for r in nulls if r["concealment"] == con]
         print(f"  null {con:<5} {sum(r['right'] for r in rs)}/{len(rs)} none | "
@@ -181,7 +205,16 @@ def main():
     ap.add_argument("--plant-bench", help="bench_diagnose_plant executable (plantsim side)")
     ap.add_argument("--plant-seeds", type=int, default=2)
     ap.add_argument("--plant-output", help="a saved bench_diagnose_plant output to tabulate")
+    ap.add_argument("--rescore", help="tabulate an earlier results.json again, run nothing")
     a = ap.parse_args()
+    if a.rescore:
+        doc = json.load(open(a.rescore))
+        for r in doc["cases"]:
+            r["right"] = is_right(r["effect"], r["verdict"], r["concealment"], r.get("named", ()))
+        tables(doc["cases"], f"gensim (seed {doc['seed']})")
+        if doc.get("plantsim_cases"):
+            tables(doc["plantsim_cases"], "plantsim (bench_diagnose_plant)")
+        return
     specs = cs.case_list(a.seed, quick=a.quick)
     if a.only:
         specs = [s for s in specs if a.only in s["effect"].split("+") or a.only == s["effect"]]
