@@ -129,7 +129,7 @@ def plan(case):
             if t["effect"] in fx.DISTURBANCES:
                 key = fx.EFFECTS[t["effect"]].key
                 p[key] = np.full(ncol, src[key], float)
-                p[key][1:] = g.NOMINAL[key]
+                p[key][1:] = det.get(key, g.NOMINAL[key])
         if with_effects:
             for j, combo in enumerate(combos, start=1):
                 for t, v, is_nom in combo:
