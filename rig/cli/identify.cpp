@@ -148,6 +148,9 @@ ident::IdentifyResult identify_records(const IdentifyArgs& a,
   o.methods = parse_methods(a.method);
   o.order = parse_order(a.order);
   o.delay_s = parse_delay(a.delay);
+  // A given dead time refers to what the report's do: the plant when the timing is known.
+  if (o.delay_s && ctx.timing_correction_s)
+    o.delay_s = std::max(0.0, *o.delay_s - *ctx.timing_correction_s);
   o.correlator = ctx.correlator;
   o.estimation_fraction = a.estimation_fraction;
   o.progress = table_progress(a.json);
@@ -159,6 +162,22 @@ ident::IdentifyResult identify_records(const IdentifyArgs& a,
   const double corr_est = ctx.timing_correction_s.value_or(0.0);
   o.validation_delay_shift_s = corr_est - records.back().timing_correction_s().value_or(corr_est);
   return ident::identify(est, val, dt_s, o);
+}
+
+// Exit 1 with report.json and report.html but no model.json: a fatal data-quality flag, or
+// no structure gave a stable model (ctx.no_model says so).
+int without_model(const IdentifyArgs& a, const IdentifyContext& ctx,
+                  const ident::QualityReport& quality, const std::filesystem::path& dir) {
+  const IdentifyRecord& first = ctx.records->front();
+  const Eigen::VectorXd uc = first.u().array() - first.u().mean();
+  const Eigen::VectorXd yc = first.y().array() - first.y().mean();
+  const nlohmann::json rep = identify_report_json(ctx, quality, nullptr);
+  report::write_json_file(dir / "report.json", rep);
+  write_identify_html(dir / "report.html", ctx, quality, nullptr,
+                      signal::auto_correlation(uc, ctx.correlator),
+                      signal::cross_correlation(yc, uc, ctx.correlator));
+  emit(a, rep, identify_summary(ctx, quality, nullptr, dir), true);
+  return kExitAcceptance;
 }
 
 int run_identify(const IdentifyArgs& a) {
@@ -187,18 +206,14 @@ int run_identify(const IdentifyArgs& a) {
     check_record_quality(records[i], paths[i], ctx.correlator, order, !delay);
   const ident::QualityReport quality = combined_quality(records);
   const std::filesystem::path dir(a.out);
-  if (quality.has_fatal()) {
-    const Eigen::VectorXd uc = first.u().array() - first.u().mean();
-    const Eigen::VectorXd yc = first.y().array() - first.y().mean();
-    const auto ruu = signal::auto_correlation(uc, ctx.correlator);
-    const auto ryu = signal::cross_correlation(yc, uc, ctx.correlator);
-    const nlohmann::json rep = identify_report_json(ctx, quality, nullptr);
-    report::write_json_file(dir / "report.json", rep);
-    write_identify_html(dir / "report.html", ctx, quality, nullptr, ruu, ryu);
-    emit(a, rep, identify_summary(ctx, quality, nullptr, dir), true);
-    return kExitAcceptance;
+  if (quality.has_fatal()) return without_model(a, ctx, quality, dir);
+  ident::IdentifyResult result;
+  try {
+    result = identify_records(a, records, ctx);
+  } catch (const ident::NoStableModel& e) {
+    ctx.no_model = e.what();
+    return without_model(a, ctx, quality, dir);
   }
-  ident::IdentifyResult result = identify_records(a, records, ctx);
   if (ctx.timing_correction_s) refer_delays_to_plant(result, *ctx.timing_correction_s);
   model::write_model(dir / "model.json", identify_model_file(ctx, result));
   const nlohmann::json rep = identify_report_json(ctx, quality, &result);

@@ -30,12 +30,14 @@ struct IdentifyContext {
   // Added to dead times identified on the rows to refer them to the plant (sidecar
   // y_sampled_after_s); empty: they refer to the rows.
   std::optional<double> timing_correction_s;
+  std::string no_model;  // why there is no model though the quality checks passed
   bool separate_validation() const {
     return records && !records->empty() && records->back().role == "validation";
   }
 };
 
-// result == nullptr: the data-quality checks stopped the run (status "data_quality_failed").
+// result == nullptr: the data-quality checks stopped the run (status "data_quality_failed"),
+// or no structure gave a stable model (ctx.no_model; status "no_stable_model").
 nlohmann::json identify_report_json(const IdentifyContext& ctx, const ident::QualityReport& quality,
                                     const ident::IdentifyResult* result);
 

@@ -161,7 +161,8 @@ void write_identify_html(const std::filesystem::path& path, const IdentifyContex
             : std::string("the recording's rows (no sample timing in a sidecar)")},
        {"result",
         r ? fmt::format("validation fit {:.1f} % ({})", r->validation_fit_pct, r->structure.name())
-          : std::string("not identified: data-quality checks failed")}});
+        : ctx.no_model.empty() ? std::string("not identified: data-quality checks failed")
+                               : "not identified: " + ctx.no_model}});
   for (const auto& w : rec.warnings) page.note(report::Tone::kWarning, w);
   quality_block(page, quality);
   if (r) {
@@ -201,6 +202,7 @@ std::string identify_summary(const IdentifyContext& ctx, const ident::QualityRep
     s += fmt::format("  wrote {}, {}, {}\n", (out / "model.json").string(),
                      (out / "report.json").string(), (out / "report.html").string());
   } else {
+    if (!ctx.no_model.empty()) s += "  " + ctx.no_model + "\n";
     s += fmt::format("  not identified; wrote {}, {}\n", (out / "report.json").string(),
                      (out / "report.html").string());
   }

@@ -182,7 +182,9 @@ json result_json(const ident::IdentifyResult& r) {
 json identify_report_json(const IdentifyContext& ctx, const ident::QualityReport& quality,
                           const ident::IdentifyResult* result) {
   json j = {{"command", "identify"},
-            {"status", result ? "ok" : "data_quality_failed"},
+            {"status", result                 ? "ok"
+                       : ctx.no_model.empty() ? "data_quality_failed"
+                                              : "no_stable_model"},
             {"exit_code", result ? 0 : 1},
             {"recording", recording_json(ctx)},
             {"settings", settings_json(ctx, result)},
@@ -192,6 +194,7 @@ json identify_report_json(const IdentifyContext& ctx, const ident::QualityReport
              {{"refers_to", ctx.timing_correction_s ? "plant" : "rows"},
               {"correction_s",
                ctx.timing_correction_s ? json(*ctx.timing_correction_s) : json(nullptr)}}}};
+  if (!ctx.no_model.empty()) j["message"] = ctx.no_model;
   if (result) {
     j.update(result_json(*result));
     j["files"] = {{"model", "model.json"}, {"report_html", "report.html"}};

@@ -177,7 +177,11 @@ void finish(const RecordSet& data, double dt_s, const StructureFit& fit, const I
 }
 
 const StructureFit& chosen_or_throw(const StructureTable& t) {
-  if (!t.chosen_fit()) throw std::invalid_argument("identify: no structure gave a stable model");
+  if (!t.chosen_fit()) {
+    throw NoStableModel(
+        "no structure of the fit table gave a stable model: the records do not determine one "
+        "(more excitation, a longer record, or another --order)");
+  }
   return *t.chosen_fit();
 }
 

@@ -15,6 +15,7 @@
 
 #include <Eigen/Core>
 #include <optional>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -72,8 +73,15 @@ struct IdentifyResult {
   double band_factor = 0.0;
 };
 
+// No structure of the table gave a stable model: the data do not support one (not a usage
+// error; `rig identify` exits 1 and writes no model).
+struct NoStableModel : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
 // One record. Throws std::invalid_argument (one line) for mismatched lengths, too short a
-// record, dt_s <= 0, an inadmissible order or no stable structure.
+// record, dt_s <= 0 or an inadmissible order, NoStableModel when no structure gave a
+// stable model.
 IdentifyResult identify(const Eigen::VectorXd& u, const Eigen::VectorXd& y, double dt_s,
                         const IdentifyOptions& options);
 

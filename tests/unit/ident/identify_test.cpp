@@ -91,5 +91,18 @@ TEST(Identify, RejectsBadInput) {
                std::invalid_argument);
 }
 
+// When no structure of the table gives a model (here: a sixth-order MMFM whose modulating
+// functions cannot fit a 16-lag correlation window), identify() says so with NoStableModel
+// (rig identify: exit 1, no model), not with a usage error.
+TEST(Identify, NoFittedStructureGivesNoStableModel) {
+  const auto rec = experiments::stornoway_record(41, 2.0);
+  IdentifyOptions io;
+  io.order = model::ModelOrder{6, 5};
+  io.methods = {IdentMethod::kMmfm};
+  io.correlator.lags = 16;
+  io.blocks = 0;
+  EXPECT_THROW(identify(rec.u, rec.y, rec.dt_s, io), NoStableModel);
+}
+
 }  // namespace
 }  // namespace rig::ident
