@@ -22,18 +22,9 @@ import subprocess
 import sys
 import tempfile
 
-PROFILE = """[steady_state]
-duration_s = 5.0
-[pilot]
-duration_s = 10.0
-[excitation]
-type = "gaussian"
-[mmfm]
-min_duration_s = 120.0
-max_duration_s = 180.0
-[sweep]
-points = 8
-"""
+# The commissioning test of rig identify's tests (Gaussian excitation 120-180 s).
+PROFILE = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "integration",
+                       "identify", "gaussian_commissioning.toml")
 LOADS_KW = (3500, 2000)  # the preset's operating point and a lighter one (thesis 5-3)
 CHOICE_MARGIN_PCT = 1.0
 
@@ -58,7 +49,7 @@ def plant_toml(plantsim, work, load_kw):
 def commission(args, work, plant, seed, name):
     out = os.path.join(work, name)
     run([args.rig, "commission", "--emulate", "--preset", plant, "--seed", str(seed), "--quiet",
-         "--force", "--test", os.path.join(work, "test.toml"), "--out", out])
+         "--force", "--test", PROFILE, "--out", out])
     return os.path.join(out, "recording.csv")
 
 
@@ -104,8 +95,6 @@ def main():
     ap.add_argument("--seed", type=int, default=1)
     args = ap.parse_args()
     work = tempfile.mkdtemp(prefix="rig_fit_table_bench_")
-    with open(os.path.join(work, "test.toml"), "w") as f:
-        f.write(PROFILE)
     print(f"== rig identify fit table: seeds {args.seed}..{args.seed + 2} per load, loads "
           f"{LOADS_KW} kW, work {work} ==")
     recs, chosen = {}, {}

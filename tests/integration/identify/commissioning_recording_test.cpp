@@ -17,31 +17,13 @@ namespace {
 
 constexpr double kModeHz = 2.03;  // the preset's electromechanical mode
 
-// Steady state 5 s, pilot 10 s, Gaussian excitation 120-180 s, an 8-point swept sine: a few
-// seconds in lockstep. Gaussian, not the default shaped multisine: MMFM's automatic delay
-// and scale search (rig identify's default method) does not yet handle a periodic
-// excitation's correlations (a second order 2 Hz off on it; SRIVC is right).
-constexpr const char* kProfile = R"([steady_state]
-duration_s = 5.0
-[pilot]
-duration_s = 10.0
-[excitation]
-type = "gaussian"
-[mmfm]
-min_duration_s = 120.0
-max_duration_s = 180.0
-[sweep]
-points = 8
-)";
-
 // One lockstep commissioning run shared by the tests of this file (seed 3).
 const std::filesystem::path& commissioning_dir() {
   static const std::filesystem::path dir = [] {
     const auto d = scratch("commissioning");
-    std::ofstream(d / "test.toml") << kProfile;
     const RunResult r =
         run_rig(fmt::format("commission --emulate --seed 3 --quiet --test {} --out {}",
-                            (d / "test.toml").string(), (d / "run").string()),
+                            RIG_IDENTIFY_PROFILE, (d / "run").string()),
                 d);
     EXPECT_EQ(r.exit_code, 0) << r.out << r.err;
     return d / "run";

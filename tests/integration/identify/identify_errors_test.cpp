@@ -1,8 +1,8 @@
 // Exit codes and one-line messages of `rig identify` for bad input (DESIGN.md section 4).
+#include <gtest/gtest.h>
+
 #include <algorithm>
 #include <cmath>
-
-#include <gtest/gtest.h>
 
 #include "cli_runner.hpp"
 
@@ -16,7 +16,8 @@ std::string sine_rows(int n, bool constant_input = false) {
   std::string text = "t,u,y\n";
   for (int i = 0; i < n; ++i) {
     const double u = constant_input ? 1.0 : std::sin(0.37 * i) + std::sin(1.3 * i);
-    text += std::to_string(0.01 * i) + "," + std::to_string(u) + "," + std::to_string(0.5 * u) + "\n";
+    text +=
+        std::to_string(0.01 * i) + "," + std::to_string(u) + "," + std::to_string(0.5 * u) + "\n";
   }
   return text;
 }
@@ -47,8 +48,9 @@ TEST(IdentifyErrors, BadInputsExitWithTwoAndOneLineNamingTheFile) {
     SCOPED_TRACE(c.name);
     const auto dir = scratch(c.name);
     std::ofstream(dir / "rec.csv") << c.text;
-    const auto r = run_rig("identify --recording " + (dir / "rec.csv").string() + " " + c.extra_args +
-                               " --out " + (dir / "out").string(), dir);
+    const auto r = run_rig("identify --recording " + (dir / "rec.csv").string() + " " +
+                               c.extra_args + " --out " + (dir / "out").string(),
+                           dir);
     EXPECT_EQ(r.exit_code, 2) << r.out << r.err;
     EXPECT_NE(r.err.find(c.words), std::string::npos) << r.err;
     EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << "one line: " << r.err;
@@ -60,8 +62,12 @@ TEST(IdentifyErrors, BadInputsExitWithTwoAndOneLineNamingTheFile) {
 
 TEST(IdentifyErrors, MissingFileAndUsageErrorsExitWithTwo) {
   const auto dir = scratch("usage");
-  EXPECT_EQ(run_rig("identify --recording " + (dir / "nope.csv").string() + " --out " + dir.string(), dir).exit_code, 2);
-  EXPECT_EQ(run_rig("identify --out " + dir.string(), dir).exit_code, 2) << "--recording is required";
+  EXPECT_EQ(
+      run_rig("identify --recording " + (dir / "nope.csv").string() + " --out " + dir.string(), dir)
+          .exit_code,
+      2);
+  EXPECT_EQ(run_rig("identify --out " + dir.string(), dir).exit_code, 2)
+      << "--recording is required";
   EXPECT_EQ(run_rig("identify --recording x.csv --out d --method magic", dir).exit_code, 2);
   EXPECT_EQ(run_rig("no-such-command", dir).exit_code, 2);
   EXPECT_EQ(run_rig("", dir).exit_code, 2) << "a subcommand is required";
@@ -82,11 +88,17 @@ TEST(IdentifyErrors, UnrelatedOutputFailsWithOneAndNamesTheCheck) {
   const auto dir = scratch("unrelated");
   std::string text = "t,u,y\n";
   for (int i = 0; i < 4000; ++i) {  // y is a different deterministic sequence than u
-    text += std::to_string(0.01 * i) + "," + std::to_string(std::sin(0.37 * i) + std::sin(1.31 * i) + std::sin(2.9 * i) + std::sin(0.11 * i)) +
-            "," + std::to_string(std::sin(0.523 * i * i * 1e-3) + std::cos(2.1 * i + 0.002 * i * i)) + "\n";
+    text += std::to_string(0.01 * i) + "," +
+            std::to_string(std::sin(0.37 * i) + std::sin(1.31 * i) + std::sin(2.9 * i) +
+                           std::sin(0.11 * i)) +
+            "," +
+            std::to_string(std::sin(0.523 * i * i * 1e-3) + std::cos(2.1 * i + 0.002 * i * i)) +
+            "\n";
   }
   std::ofstream(dir / "rec.csv") << text;
-  const auto r = run_rig("identify --recording " + (dir / "rec.csv").string() + " --out " + (dir / "out").string(), dir);
+  const auto r = run_rig(
+      "identify --recording " + (dir / "rec.csv").string() + " --out " + (dir / "out").string(),
+      dir);
   EXPECT_EQ(r.exit_code, 1) << r.out << r.err;
   EXPECT_NE(r.err.find("does not respond"), std::string::npos) << r.err;
 }
