@@ -80,11 +80,20 @@ std::string what_effect_means(const AppliedEffect& e, const HypothesisFit& h, co
       return fmt::format(
           "a first-order lag of {:.0f} ms (corner {:.2f} Hz) is missing in the plant", 1e3 * p[0],
           1.0 / (2.0 * std::numbers::pi * p[0]));
-    case Effect::kSensorLag:
+    case Effect::kSensorLag: {
+      const double ratio = derived(h, "noise_rolloff_ratio");
+      if (!std::isfinite(ratio)) {
+        // The corner is too near half the sample rate for two noise bands around it.
+        return fmt::format(
+            "the measurement lags by {:.0f} ms more than modelled (corner {:.1f} Hz, too near "
+            "half the sample rate for the noise to tell the transducer from the plant)",
+            1e3 * p[0], 1.0 / (2.0 * std::numbers::pi * p[0]));
+      }
       return fmt::format(
           "the measurement lags by {:.0f} ms more than modelled; the noise is filtered "
           "too (noise above the corner is {:.2f} of that below), so it is the transducer",
-          1e3 * p[0], derived(h, "noise_rolloff_ratio"));
+          1e3 * p[0], ratio);
+    }
     case Effect::kResonance:
       return fmt::format(
           "an unmodelled resonance at {:.2f} Hz (damping ratio {:.3f}, gain x{:.2f} at its peak)",

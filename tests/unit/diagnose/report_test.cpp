@@ -46,5 +46,22 @@ TEST(Report, JsonHasTheDocumentedKeysAndTheModelRoundTrips) {
   std::filesystem::remove_all(dir);
 }
 
+// A sensor lag whose corner is too near half the sample rate has no noise roll-off figure:
+// the explanation says why instead of printing "nan".
+TEST(Report, SensorLagWithoutRolloffFigureIsExplainedInWords) {
+  DiagnoseResult r;
+  r.verdict = "sensor_lag";
+  HypothesisFit h;
+  h.effects = {AppliedEffect{Effect::kSensorLag, {0.004}}};
+  h.validation_fit_before = 60.0;
+  h.validation_fit_after = 70.0;
+  r.hypotheses = {h};
+  r.chosen_index = 0;
+  r.problem.dt_s = 0.01;
+  const std::string text = explain(r);
+  EXPECT_EQ(text.find("nan"), std::string::npos) << text;
+  EXPECT_NE(text.find("too near half the sample rate"), std::string::npos) << text;
+}
+
 }  // namespace
 }  // namespace rig::diagnose
