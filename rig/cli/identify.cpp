@@ -80,13 +80,16 @@ std::optional<model::ModelOrder> parse_order(const std::string& text) {
   return order;
 }
 
+// auto: the table has structures with an estimated dead time and without one; estimated:
+// only with one; a number: that dead time.
 std::optional<double> parse_delay(const std::string& text) {
-  if (text == "auto") return std::nullopt;
+  if (text == "auto" || text == "estimated") return std::nullopt;
   double v = 0.0;
   const auto r = std::from_chars(text.data(), text.data() + text.size(), v);
   if (r.ec != std::errc() || r.ptr != text.data() + text.size() || !(v >= 0.0) ||
       !std::isfinite(v)) {
-    bad_option("--delay", "expected auto or a dead time >= 0 in seconds, found \"" + text + "\"");
+    bad_option("--delay",
+               "expected auto, estimated or a dead time >= 0 in seconds, found \"" + text + "\"");
   }
   return v;
 }
@@ -148,6 +151,7 @@ ident::IdentifyResult identify_records(const IdentifyArgs& a,
   o.methods = parse_methods(a.method);
   o.order = parse_order(a.order);
   o.delay_s = parse_delay(a.delay);
+  o.without_delay = a.delay == "auto";
   // A given dead time refers to what the report's do: the plant when the timing is known.
   if (o.delay_s && ctx.timing_correction_s)
     o.delay_s = std::max(0.0, *o.delay_s - *ctx.timing_correction_s);
@@ -251,7 +255,10 @@ void add_identify_command(CLI::App& app) {
   cmd->add_option("--dt", a->columns.dt_s,
                   "Sample period in s (overrides the time column and sidecar)");
   cmd->add_option("--order", a->order, "Model order n/m (den/num), or auto")->default_str("auto");
-  cmd->add_option("--delay", a->delay, "Dead time in s, or auto")->default_str("auto");
+  cmd->add_option("--delay", a->delay,
+                  "Dead time in s; auto: structures with an estimated dead time and without one; "
+                  "estimated: only with one")
+      ->default_str("auto");
   cmd->add_option("--method", a->method,
                   "Estimators in the fit table: all, or any of mmfm, mmfm+oe (MMFM refined by "
                   "the time-domain output error), srivc, separated by commas")

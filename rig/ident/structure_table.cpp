@@ -166,7 +166,7 @@ std::vector<Structure> table_structures(const StructureTableOptions& opt) {
   for (const model::ModelOrder& o : orders)
     for (IdentMethod method : opt.methods) {
       if (!opt.delay_s) out.push_back({o, true, method});
-      out.push_back({o, false, method});
+      if (opt.delay_s || opt.without_delay) out.push_back({o, false, method});
     }
   return out;
 }

@@ -73,6 +73,7 @@ struct StructureTableOptions {
   std::optional<model::ModelOrder> order;  // only this order; else n <= max_order, m < n
   int max_order = kMaxTableOrder;
   std::optional<double> delay_s;         // given: every structure uses it; else estimated, and 0
+  bool without_delay = true;             // delay not given: also the structures without one
   double max_delay_s = -1.0;             // < 0: each estimator's default
   signal::CorrelatorOptions correlator;  // dt_s is overwritten
   MmfmOptions mmfm;                      // order and delay fields are overridden

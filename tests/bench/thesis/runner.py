@@ -114,8 +114,9 @@ def identify(rig, recording, order='2/0', delay='auto', lags=None, skip=None, ro
     """rig identify (MMFM) on a CSV; the parsed report.json (its files are not kept), or
     None when it gave no model (a failed check, or no stable model)."""
     with tempfile.TemporaryDirectory(prefix='thesis-id-') as out_dir:
+        # The thesis's method always has a dead time: estimated, never left out.
         cmd = NICE + [rig, 'identify', '--recording', recording, '--order', order, '--delay',
-                      str(delay), '--method', 'mmfm', '--rows', rows, '--out', out_dir,
+                      'estimated' if delay == 'auto' else str(delay), '--method', 'mmfm', '--rows', rows, '--out', out_dir,
                       '--force', '--json']
         if lags:
             cmd += ['--lags', str(lags)]

@@ -124,7 +124,8 @@ TEST(IdentifyFitTable, DeadTimeRefersToThePlantAsCommissionsModel) {
   RunResult r;
   std::filesystem::path out;
   const json rep =
-      identify("--recording " + recording(1) + " --order 2/0 --method mmfm+oe", "timing", r, &out);
+      identify("--recording " + recording(1) + " --order 2/0 --method mmfm+oe --delay estimated",
+               "timing", r, &out);
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const double commission_s = commission["delay_s"];
   const double identify_s = rep["delay"]["value_s"];
@@ -134,6 +135,9 @@ TEST(IdentifyFitTable, DeadTimeRefersToThePlantAsCommissionsModel) {
       "after u, correction {:+.4f} s)\n",
       commission_s, identify_s, after_s, rep["timing"]["correction_s"].get<double>());
   EXPECT_EQ(rep["timing"]["refers_to"], "plant");
+  // --delay estimated: only the structure with a dead time.
+  ASSERT_EQ(rep["fit_table"]["rows"].size(), 1u);
+  EXPECT_TRUE(rep["fit_table"]["rows"][0]["delay_estimated"].get<bool>());
   EXPECT_NEAR(rep["timing"]["correction_s"].get<double>(), after_s - 0.005, 1e-12);
   EXPECT_NEAR(identify_s, commission_s, kDelayAgreementS);
   const json model = json::parse(slurp(out / "model.json"));
