@@ -6,6 +6,7 @@
 #include <stdexcept>
 
 #include "rig/diagnose/blocks.hpp"
+#include "rig/diagnose/effect_registry.hpp"
 #include "rig/signal/ac_coupling.hpp"
 
 namespace rig::diagnose {
@@ -13,109 +14,24 @@ namespace {
 
 constexpr double kTwoPi = 2.0 * std::numbers::pi;
 
-Eigen::VectorXd vec(std::initializer_list<double> v) {
-  Eigen::VectorXd out(static_cast<Eigen::Index>(v.size()));
-  Eigen::Index i = 0;
-  for (double x : v) out(i++) = x;
-  return out;
-}
-
-// Replaces the least damped complex pole pair's damping ratio; wn (and so the static gain,
-// since the pair contributes wn^2 to a_0) is kept.
-void set_mode_damping(model::TransferFunction& tf, double zeta) {
-  const Eigen::VectorXcd p = tf.poles();
-  Eigen::Index best = -1;
-  double best_zeta = 2.0;
-  for (Eigen::Index i = 0; i < p.size(); ++i) {
-    if (p(i).imag() <= 1e-9 * std::abs(p(i))) continue;
-    const double z = -p(i).real() / std::abs(p(i));
-    if (z < best_zeta) best_zeta = z, best = i;
-  }
-  if (best < 0) return;
-  const double wn = std::abs(p(best));
-  Eigen::VectorXcd roots(p.size());
-  Eigen::Index k = 0;
-  bool dropped_conj = false;
-  for (Eigen::Index i = 0; i < p.size(); ++i) {
-    if (i == best) continue;
-    if (!dropped_conj && std::abs(p(i) - std::conj(p(best))) < 1e-9 * wn) {
-      dropped_conj = true;
-      continue;
-    }
-    roots(k++) = p(i);
-  }
-  const std::complex<double> disc = std::sqrt(std::complex<double>(zeta * zeta - 1.0, 0.0));
-  roots(k++) = wn * (-zeta + disc);
-  roots(k++) = wn * (-zeta - disc);
-  tf.den = tf.den(0) * poly_from_roots(roots.head(k));
-}
-
 void apply_linear(model::TransferFunction& tf, const AppliedEffect& e) {
-  const auto& p = e.params;
-  switch (e.effect) {
-    case Effect::kDeadTime:
-      tf.delay_s = std::max(0.0, tf.delay_s + p[0]);
-      break;
-    case Effect::kExtraLag:
-    case Effect::kSensorLag:
-      tf.den = poly_multiply(tf.den, vec({p[0], 1.0}));
-      break;
-    case Effect::kResonance: {
-      // (s^2 + 2 zeta r w s + w^2) / (s^2 + 2 zeta w s + w^2): unity away from w, a peak
-      // of r at w (a notch when r < 1). Scaled by 1/w^2 for conditioning.
-      const double w = kTwoPi * p[0], zeta = p[1], r = p[2];
-      tf.num = poly_multiply(tf.num, vec({1.0 / (w * w), 2.0 * zeta * r / w, 1.0}));
-      tf.den = poly_multiply(tf.den, vec({1.0 / (w * w), 2.0 * zeta / w, 1.0}));
-      break;
-    }
-    case Effect::kAcCoupling:
-      tf.num = poly_multiply(tf.num, vec({p[0], 0.0}));
-      tf.den = poly_multiply(tf.den, vec({p[0], 1.0}));
-      break;
-    case Effect::kLoadDamping:
-      set_mode_damping(tf, p[0]);
-      break;
-    case Effect::kGainChange:
-      tf.num *= p[0];
-      break;
-    default:
-      break;
-  }
+  if (const auto apply = effect_model(e.effect).apply_linear) apply(tf, e.params);
 }
 
 Eigen::VectorXd apply_input(const Problem& pr, const AppliedEffect& e, Eigen::VectorXd v) {
-  const auto& p = e.params;
-  switch (e.effect) {
-    case Effect::kDeadband:
-      return deadband(v, p[0]);
-    case Effect::kBacklash:
-      return backlash(v, p[0]);
-    case Effect::kSaturation:
-      return p.size() > 2 ? saturate_in_loop(v, -p[1], p[0], p[2], pr.dt_s)
-                          : saturate(v, -p[1], p[0]);
-    case Effect::kRateLimit:
-      return p.size() > 1 ? rate_limit_in_loop(v, p[0], p[1], pr.dt_s)
-                          : rate_limit(v, p[0], pr.dt_s);
-    case Effect::kStaticNonlinearity:
-      return polynomial(v, p[0], p[1], pr.scales.u_std);
-    default:
-      return v;
-  }
+  if (const auto apply = effect_model(e.effect).apply_input)
+    return apply(pr, e.params, std::move(v));
+  return v;
 }
 
-// Output feedback of nonlinear_stiffness (cubic, kappa = relative incremental stiffness
-// change 3 k3 sigma^2 K at one standard deviation sigma of the output, K the static gain)
-// and coulomb_friction (Fc tanh(dz / eps), eps = 5 % of the rate's standard deviation).
+// The output feedback of the feedback effects (their terms: effect_registry.hpp).
 OutputFeedback feedback_of(const Problem& pr, std::span<const AppliedEffect> effects) {
-  double k3 = 0.0, fc = 0.0;
-  const double sz = std::max(pr.scales.z_std, 1e-300);
-  const double eps = 0.05 * std::max(pr.scales.z_rate_std, 1e-300);
-  for (const auto& e : effects) {
-    if (e.effect == Effect::kNonlinearStiffness)
-      k3 = e.params[0] / (3.0 * sz * sz * pr.scales.dc_gain);
-    if (e.effect == Effect::kCoulombFriction) fc = e.params[0];
-  }
-  return [=](double z, double dz) { return k3 * z * z * z + fc * std::tanh(dz / eps); };
+  FeedbackTerms t;
+  for (const auto& e : effects)
+    if (const auto terms = effect_model(e.effect).feedback) terms(pr, e.params, t);
+  return [=](double z, double dz) {
+    return t.cubic * z * z * z + t.friction * std::tanh(dz / t.friction_eps);
+  };
 }
 
 }  // namespace
