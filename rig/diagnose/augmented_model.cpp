@@ -117,41 +117,40 @@ ModelOutput model_output(const Problem& pr, std::span<const AppliedEffect> effec
     if (pr.active_to < n) z.tail(n - pr.active_to) = pr.baseline_z.tail(n - pr.active_to);
   }
   if (pr.output_rc_s) z = signal::ac_couple(z, pr.dt_s, *pr.output_rc_s);
-  // Offset (and the periodic disturbance's cosine and sine) by weighted least squares.
-  const AppliedEffect* periodic = nullptr;
-  const AppliedEffect* drift = nullptr;
-  for (const auto& e : effects) {
-    if (e.effect == Effect::kPeriodicDisturbance) periodic = &e;
-    if (e.effect == Effect::kDrift) drift = &e;
-  }
+  // Offset (the level shift's, and the disturbances' regressors) by weighted least squares.
+  std::vector<const AppliedEffect*> fitted;
+  Eigen::Index extra = 0;
+  for (const auto& e : effects)
+    if (const int c = effect_model(e.effect).regressor_columns; c > 0)
+      fitted.push_back(&e), extra += c;
   const Eigen::Index n = z.size();
   const bool shift = pr.level_shift_at > 0 && pr.level_shift_at < n;
-  Eigen::MatrixXd x(n, (periodic ? 3 : 1) + (shift ? 1 : 0));
+  Eigen::MatrixXd x(n, 1 + extra + (shift ? 1 : 0));
   x.col(0).setOnes();
   if (shift) {
     x.col(x.cols() - 1).head(pr.level_shift_at).setZero();
     x.col(x.cols() - 1).tail(n - pr.level_shift_at).setOnes();
   }
-  if (periodic) {
-    const Eigen::ArrayXd t =
-        Eigen::ArrayXd::LinSpaced(n, 0.0, static_cast<double>(n - 1)) * pr.dt_s;
-    x.col(1) = (kTwoPi * periodic->params[0] * t).cos().matrix();
-    x.col(2) = (kTwoPi * periodic->params[0] * t).sin().matrix();
+  Eigen::Index col = 1;
+  for (const AppliedEffect* e : fitted) {
+    const EffectModel& m = effect_model(e->effect);
+    m.regressors(pr, e->params, x.middleCols(col, m.regressor_columns));
+    col += m.regressor_columns;
   }
   const Eigen::VectorXd sw = pr.est_weight.sqrt().matrix();
   const Eigen::VectorXd beta =
       (sw.asDiagonal() * x).colPivHouseholderQr().solve(sw.asDiagonal() * (pr.y - z));
   out.yhat = z + x * beta;
   if (shift) out.derived.emplace_back("level_shift", beta(x.cols() - 1));
-  if (periodic) {
-    out.derived.emplace_back("amplitude", std::hypot(beta(1), beta(2)));
-    out.derived.emplace_back("phase_deg", std::atan2(-beta(2), beta(1)) * 180.0 / std::numbers::pi);
+  col = 1;
+  for (const AppliedEffect* e : fitted) {
+    const EffectModel& m = effect_model(e->effect);
+    m.from_coefficients(beta.segment(col, m.regressor_columns), out.derived);
+    col += m.regressor_columns;
   }
-  if (drift) {
-    const Eigen::VectorXd d = smooth_zero_phase(pr.y - out.yhat, drift->params[0], pr.dt_s);
-    out.yhat += d;
-    out.derived.emplace_back("drift_rms", std::sqrt(d.array().square().mean()));
-  }
+  for (const auto& e : effects)
+    if (const auto after = effect_model(e.effect).after_fit)
+      after(pr, e.params, out.yhat, out.derived);
   return out;
 }
 

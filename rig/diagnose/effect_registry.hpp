@@ -10,6 +10,7 @@
 #include <span>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 #include "rig/diagnose/effects.hpp"
@@ -21,7 +22,8 @@ struct Problem;
 struct Location;
 struct HypothesisFit;
 
-using Params = std::vector<double>;  // as the effect's parameter_specs()
+using Params = std::vector<double>;                           // as the effect's parameter_specs()
+using Derived = std::vector<std::pair<std::string, double>>;  // e.g. the disturbance amplitude
 
 // The output feedback of the feedback effects (augmented_model.cpp):
 //   v' = v(t - Td) - cubic z^3 - friction tanh(dz / friction_eps)
@@ -68,6 +70,15 @@ struct EffectModel {
                                  Eigen::VectorXd v) = nullptr;
   // Its terms of the output feedback (kFeedback).
   void (*feedback)(const Problem& problem, const Params& p, FeedbackTerms& terms) = nullptr;
+  // A disturbance's part of the output's least-squares fit (augmented_model.cpp): columns
+  // beside the offset's, and what their fitted coefficients mean ...
+  int regressor_columns = 0;
+  void (*regressors)(const Problem& problem, const Params& p,
+                     Eigen::Ref<Eigen::MatrixXd> columns) = nullptr;
+  void (*from_coefficients)(const Eigen::VectorXd& coefficients, Derived& derived) = nullptr;
+  // ... and a correction of the fitted output after it.
+  void (*after_fit)(const Problem& problem, const Params& p, Eigen::VectorXd& yhat,
+                    Derived& derived) = nullptr;
   // What the fitted effect means, with numbers (explain.cpp joins these).
   std::string (*explain)(const AppliedEffect& effect, const HypothesisFit& hypothesis,
                          const Problem& problem) = nullptr;

@@ -6,7 +6,9 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <cmath>
 
+#include "rig/diagnose/blocks.hpp"
 #include "rig/diagnose/diagnose.hpp"
 #include "rig/diagnose/effects/common.hpp"
 
@@ -20,6 +22,13 @@ std::vector<ParamSpec> specs(const DataScales& s) {
 }
 
 std::vector<Params> seeds(const Problem&, const Location& loc) { return {{loc.dist.drift_tau_s}}; }
+
+// The zero-phase smoothed residual of the fitted output is the drift.
+void after_fit(const Problem& pr, const Params& p, Eigen::VectorXd& yhat, Derived& derived) {
+  const Eigen::VectorXd d = smooth_zero_phase(pr.y - yhat, p[0], pr.dt_s);
+  yhat += d;
+  derived.emplace_back("drift_rms", std::sqrt(d.array().square().mean()));
+}
 
 std::string meaning(const AppliedEffect& e, const HypothesisFit& h, const Problem&) {
   return fmt::format("a slow drift (time scale {:.0f} s, rms {:.3g}) not caused by the input",
@@ -43,6 +52,7 @@ const EffectModel kDriftEffect{
     .description = "a slow wander of the output not caused by the input",
     .parameter_specs = specs,
     .seeds = seeds,
+    .after_fit = after_fit,
     .explain = meaning,
     .map_to_plant = to_plant,
 };

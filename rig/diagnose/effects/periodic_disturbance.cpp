@@ -6,6 +6,8 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <cmath>
+#include <numbers>
 
 #include "rig/diagnose/diagnose.hpp"
 #include "rig/diagnose/effects/common.hpp"
@@ -18,6 +20,19 @@ std::vector<ParamSpec> specs(const DataScales& s) {
 }
 
 std::vector<Params> seeds(const Problem&, const Location& loc) { return {{loc.dist.line_freq_hz}}; }
+
+// cos and sin at freq_hz: their coefficients give the amplitude and phase.
+void regressors(const Problem& pr, const Params& p, Eigen::Ref<Eigen::MatrixXd> x) {
+  const Eigen::Index n = x.rows();
+  const Eigen::ArrayXd t = Eigen::ArrayXd::LinSpaced(n, 0.0, static_cast<double>(n - 1)) * pr.dt_s;
+  x.col(0) = (effects::kTwoPi * p[0] * t).cos().matrix();
+  x.col(1) = (effects::kTwoPi * p[0] * t).sin().matrix();
+}
+
+void from_coefficients(const Eigen::VectorXd& beta, Derived& derived) {
+  derived.emplace_back("amplitude", std::hypot(beta(0), beta(1)));
+  derived.emplace_back("phase_deg", std::atan2(-beta(1), beta(0)) * 180.0 / std::numbers::pi);
+}
 
 std::string meaning(const AppliedEffect& e, const HypothesisFit& h, const Problem&) {
   return fmt::format(
@@ -42,6 +57,9 @@ const EffectModel kPeriodicDisturbanceEffect{
     .description = "a sinusoid in the output not caused by the input (mains pick-up)",
     .parameter_specs = specs,
     .seeds = seeds,
+    .regressor_columns = 2,
+    .regressors = regressors,
+    .from_coefficients = from_coefficients,
     .explain = meaning,
     .map_to_plant = to_plant,
 };

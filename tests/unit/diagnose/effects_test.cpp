@@ -37,10 +37,13 @@ TEST(Effects, RegistryHoldsOneCompleteModelPerEffectInEnumOrder) {
     EXPECT_EQ(effect_model(std::string_view(m.name)), &m) << m.name;
     EXPECT_TRUE(m.parameter_specs && m.seeds && m.explain) << m.name;
     EXPECT_NE(std::string(m.description), "") << m.name;
-    // Each kind has exactly the application it needs (disturbances: augmented_model.cpp).
+    // Each kind has exactly the application it needs.
     EXPECT_EQ(m.apply_input != nullptr, m.kind == EffectKind::kInputNonlinearity) << m.name;
     EXPECT_EQ(m.feedback != nullptr, m.kind == EffectKind::kFeedback) << m.name;
     EXPECT_TRUE(m.kind == EffectKind::kLinear || m.apply_linear == nullptr) << m.name;
+    EXPECT_EQ(m.regressors != nullptr || m.after_fit != nullptr, m.kind == EffectKind::kDisturbance)
+        << m.name;
+    EXPECT_EQ(m.regressors != nullptr, m.regressor_columns > 0) << m.name;
   }
 }
 
