@@ -68,8 +68,8 @@ struct PlantMapping {
 };
 
 // The parameters that express a hypothesis' effects in the plant (each effect's mapping:
-// rig/diagnose/effects/<word>.cpp). `baseline` is the model the effects were fitted against; `u` the
-// recorded input (its mean is the operating bias the input limits are relative to).
+// rig/diagnose/effects/<word>.cpp). `baseline` is the model the effects were fitted against; `u`
+// the recorded input (its mean is the operating bias the input limits are relative to).
 PlantMapping plant_changes(const diagnose::HypothesisFit& hypothesis, const PlantModel& plant,
                            const model::TransferFunction& baseline, const Eigen::VectorXd& u);
 

@@ -34,6 +34,45 @@ OutputFeedback feedback_of(const Problem& pr, std::span<const AppliedEffect> eff
   };
 }
 
+// The output z plus an offset (the level shift's, and the disturbances' regressors) fitted
+// by weighted least squares on the estimation samples, then the disturbances' corrections.
+void fit_output(const Problem& pr, std::span<const AppliedEffect> effects, const Eigen::VectorXd& z,
+                ModelOutput& out) {
+  std::vector<const AppliedEffect*> fitted;
+  Eigen::Index extra = 0;
+  for (const auto& e : effects)
+    if (const int c = effect_model(e.effect).regressor_columns; c > 0)
+      fitted.push_back(&e), extra += c;
+  const Eigen::Index n = z.size();
+  const bool shift = pr.level_shift_at > 0 && pr.level_shift_at < n;
+  Eigen::MatrixXd x(n, 1 + extra + (shift ? 1 : 0));
+  x.col(0).setOnes();
+  if (shift) {
+    x.col(x.cols() - 1).head(pr.level_shift_at).setZero();
+    x.col(x.cols() - 1).tail(n - pr.level_shift_at).setOnes();
+  }
+  Eigen::Index col = 1;
+  for (const AppliedEffect* e : fitted) {
+    const EffectModel& m = effect_model(e->effect);
+    m.regressors(pr, e->params, x.middleCols(col, m.regressor_columns));
+    col += m.regressor_columns;
+  }
+  const Eigen::VectorXd sw = pr.est_weight.sqrt().matrix();
+  const Eigen::VectorXd beta =
+      (sw.asDiagonal() * x).colPivHouseholderQr().solve(sw.asDiagonal() * (pr.y - z));
+  out.yhat = z + x * beta;
+  if (shift) out.derived.emplace_back("level_shift", beta(x.cols() - 1));
+  col = 1;
+  for (const AppliedEffect* e : fitted) {
+    const EffectModel& m = effect_model(e->effect);
+    m.from_coefficients(beta.segment(col, m.regressor_columns), out.derived);
+    col += m.regressor_columns;
+  }
+  for (const auto& e : effects)
+    if (const auto after = effect_model(e.effect).after_fit)
+      after(pr, e.params, out.yhat, out.derived);
+}
+
 }  // namespace
 
 model::TransferFunction augmented_tf(const model::TransferFunction& tf,
@@ -117,40 +156,7 @@ ModelOutput model_output(const Problem& pr, std::span<const AppliedEffect> effec
     if (pr.active_to < n) z.tail(n - pr.active_to) = pr.baseline_z.tail(n - pr.active_to);
   }
   if (pr.output_rc_s) z = signal::ac_couple(z, pr.dt_s, *pr.output_rc_s);
-  // Offset (the level shift's, and the disturbances' regressors) by weighted least squares.
-  std::vector<const AppliedEffect*> fitted;
-  Eigen::Index extra = 0;
-  for (const auto& e : effects)
-    if (const int c = effect_model(e.effect).regressor_columns; c > 0)
-      fitted.push_back(&e), extra += c;
-  const Eigen::Index n = z.size();
-  const bool shift = pr.level_shift_at > 0 && pr.level_shift_at < n;
-  Eigen::MatrixXd x(n, 1 + extra + (shift ? 1 : 0));
-  x.col(0).setOnes();
-  if (shift) {
-    x.col(x.cols() - 1).head(pr.level_shift_at).setZero();
-    x.col(x.cols() - 1).tail(n - pr.level_shift_at).setOnes();
-  }
-  Eigen::Index col = 1;
-  for (const AppliedEffect* e : fitted) {
-    const EffectModel& m = effect_model(e->effect);
-    m.regressors(pr, e->params, x.middleCols(col, m.regressor_columns));
-    col += m.regressor_columns;
-  }
-  const Eigen::VectorXd sw = pr.est_weight.sqrt().matrix();
-  const Eigen::VectorXd beta =
-      (sw.asDiagonal() * x).colPivHouseholderQr().solve(sw.asDiagonal() * (pr.y - z));
-  out.yhat = z + x * beta;
-  if (shift) out.derived.emplace_back("level_shift", beta(x.cols() - 1));
-  col = 1;
-  for (const AppliedEffect* e : fitted) {
-    const EffectModel& m = effect_model(e->effect);
-    m.from_coefficients(beta.segment(col, m.regressor_columns), out.derived);
-    col += m.regressor_columns;
-  }
-  for (const auto& e : effects)
-    if (const auto after = effect_model(e.effect).after_fit)
-      after(pr, e.params, out.yhat, out.derived);
+  fit_output(pr, effects, z, out);
   return out;
 }
 
