@@ -67,9 +67,9 @@ struct PlantMapping {
   std::vector<std::string> notes;  // effects with no plant parameter, clamped values
 };
 
-// The parameters that express a hypothesis' effects in the plant (table in
-// diagnose_plant.cpp). `baseline` is the model the effects were fitted against; `u` the
-// recorded input (its mean is the operating bias the input limits are relative to).
+// The parameters that express a hypothesis' effects in the plant (each effect's mapping:
+// rig/diagnose/effects/<word>.cpp). `baseline` is the model the effects were fitted against; `u`
+// the recorded input (its mean is the operating bias the input limits are relative to).
 PlantMapping plant_changes(const diagnose::HypothesisFit& hypothesis, const PlantModel& plant,
                            const model::TransferFunction& baseline, const Eigen::VectorXd& u);
 

@@ -6,6 +6,7 @@
 #include <stdexcept>
 
 #include "rig/diagnose/blocks.hpp"
+#include "rig/diagnose/effect_registry.hpp"
 #include "rig/signal/ac_coupling.hpp"
 
 namespace rig::diagnose {
@@ -13,109 +14,63 @@ namespace {
 
 constexpr double kTwoPi = 2.0 * std::numbers::pi;
 
-Eigen::VectorXd vec(std::initializer_list<double> v) {
-  Eigen::VectorXd out(static_cast<Eigen::Index>(v.size()));
-  Eigen::Index i = 0;
-  for (double x : v) out(i++) = x;
-  return out;
-}
-
-// Replaces the least damped complex pole pair's damping ratio; wn (and so the static gain,
-// since the pair contributes wn^2 to a_0) is kept.
-void set_mode_damping(model::TransferFunction& tf, double zeta) {
-  const Eigen::VectorXcd p = tf.poles();
-  Eigen::Index best = -1;
-  double best_zeta = 2.0;
-  for (Eigen::Index i = 0; i < p.size(); ++i) {
-    if (p(i).imag() <= 1e-9 * std::abs(p(i))) continue;
-    const double z = -p(i).real() / std::abs(p(i));
-    if (z < best_zeta) best_zeta = z, best = i;
-  }
-  if (best < 0) return;
-  const double wn = std::abs(p(best));
-  Eigen::VectorXcd roots(p.size());
-  Eigen::Index k = 0;
-  bool dropped_conj = false;
-  for (Eigen::Index i = 0; i < p.size(); ++i) {
-    if (i == best) continue;
-    if (!dropped_conj && std::abs(p(i) - std::conj(p(best))) < 1e-9 * wn) {
-      dropped_conj = true;
-      continue;
-    }
-    roots(k++) = p(i);
-  }
-  const std::complex<double> disc = std::sqrt(std::complex<double>(zeta * zeta - 1.0, 0.0));
-  roots(k++) = wn * (-zeta + disc);
-  roots(k++) = wn * (-zeta - disc);
-  tf.den = tf.den(0) * poly_from_roots(roots.head(k));
-}
-
 void apply_linear(model::TransferFunction& tf, const AppliedEffect& e) {
-  const auto& p = e.params;
-  switch (e.effect) {
-    case Effect::kDeadTime:
-      tf.delay_s = std::max(0.0, tf.delay_s + p[0]);
-      break;
-    case Effect::kExtraLag:
-    case Effect::kSensorLag:
-      tf.den = poly_multiply(tf.den, vec({p[0], 1.0}));
-      break;
-    case Effect::kResonance: {
-      // (s^2 + 2 zeta r w s + w^2) / (s^2 + 2 zeta w s + w^2): unity away from w, a peak
-      // of r at w (a notch when r < 1). Scaled by 1/w^2 for conditioning.
-      const double w = kTwoPi * p[0], zeta = p[1], r = p[2];
-      tf.num = poly_multiply(tf.num, vec({1.0 / (w * w), 2.0 * zeta * r / w, 1.0}));
-      tf.den = poly_multiply(tf.den, vec({1.0 / (w * w), 2.0 * zeta / w, 1.0}));
-      break;
-    }
-    case Effect::kAcCoupling:
-      tf.num = poly_multiply(tf.num, vec({p[0], 0.0}));
-      tf.den = poly_multiply(tf.den, vec({p[0], 1.0}));
-      break;
-    case Effect::kLoadDamping:
-      set_mode_damping(tf, p[0]);
-      break;
-    case Effect::kGainChange:
-      tf.num *= p[0];
-      break;
-    default:
-      break;
-  }
+  if (const auto apply = effect_model(e.effect).apply_linear) apply(tf, e.params);
 }
 
 Eigen::VectorXd apply_input(const Problem& pr, const AppliedEffect& e, Eigen::VectorXd v) {
-  const auto& p = e.params;
-  switch (e.effect) {
-    case Effect::kDeadband:
-      return deadband(v, p[0]);
-    case Effect::kBacklash:
-      return backlash(v, p[0]);
-    case Effect::kSaturation:
-      return p.size() > 2 ? saturate_in_loop(v, -p[1], p[0], p[2], pr.dt_s)
-                          : saturate(v, -p[1], p[0]);
-    case Effect::kRateLimit:
-      return p.size() > 1 ? rate_limit_in_loop(v, p[0], p[1], pr.dt_s)
-                          : rate_limit(v, p[0], pr.dt_s);
-    case Effect::kStaticNonlinearity:
-      return polynomial(v, p[0], p[1], pr.scales.u_std);
-    default:
-      return v;
-  }
+  if (const auto apply = effect_model(e.effect).apply_input)
+    return apply(pr, e.params, std::move(v));
+  return v;
 }
 
-// Output feedback of nonlinear_stiffness (cubic, kappa = relative incremental stiffness
-// change 3 k3 sigma^2 K at one standard deviation sigma of the output, K the static gain)
-// and coulomb_friction (Fc tanh(dz / eps), eps = 5 % of the rate's standard deviation).
+// The output feedback of the feedback effects (their terms: effect_registry.hpp).
 OutputFeedback feedback_of(const Problem& pr, std::span<const AppliedEffect> effects) {
-  double k3 = 0.0, fc = 0.0;
-  const double sz = std::max(pr.scales.z_std, 1e-300);
-  const double eps = 0.05 * std::max(pr.scales.z_rate_std, 1e-300);
-  for (const auto& e : effects) {
-    if (e.effect == Effect::kNonlinearStiffness)
-      k3 = e.params[0] / (3.0 * sz * sz * pr.scales.dc_gain);
-    if (e.effect == Effect::kCoulombFriction) fc = e.params[0];
+  FeedbackTerms t;
+  for (const auto& e : effects)
+    if (const auto terms = effect_model(e.effect).feedback) terms(pr, e.params, t);
+  return [=](double z, double dz) {
+    return t.cubic * z * z * z + t.friction * std::tanh(dz / t.friction_eps);
+  };
+}
+
+// The output z plus an offset (the level shift's, and the disturbances' regressors) fitted
+// by weighted least squares on the estimation samples, then the disturbances' corrections.
+void fit_output(const Problem& pr, std::span<const AppliedEffect> effects, const Eigen::VectorXd& z,
+                ModelOutput& out) {
+  std::vector<const AppliedEffect*> fitted;
+  Eigen::Index extra = 0;
+  for (const auto& e : effects)
+    if (const int c = effect_model(e.effect).regressor_columns; c > 0)
+      fitted.push_back(&e), extra += c;
+  const Eigen::Index n = z.size();
+  const bool shift = pr.level_shift_at > 0 && pr.level_shift_at < n;
+  Eigen::MatrixXd x(n, 1 + extra + (shift ? 1 : 0));
+  x.col(0).setOnes();
+  if (shift) {
+    x.col(x.cols() - 1).head(pr.level_shift_at).setZero();
+    x.col(x.cols() - 1).tail(n - pr.level_shift_at).setOnes();
   }
-  return [=](double z, double dz) { return k3 * z * z * z + fc * std::tanh(dz / eps); };
+  Eigen::Index col = 1;
+  for (const AppliedEffect* e : fitted) {
+    const EffectModel& m = effect_model(e->effect);
+    m.regressors(pr, e->params, x.middleCols(col, m.regressor_columns));
+    col += m.regressor_columns;
+  }
+  const Eigen::VectorXd sw = pr.est_weight.sqrt().matrix();
+  const Eigen::VectorXd beta =
+      (sw.asDiagonal() * x).colPivHouseholderQr().solve(sw.asDiagonal() * (pr.y - z));
+  out.yhat = z + x * beta;
+  if (shift) out.derived.emplace_back("level_shift", beta(x.cols() - 1));
+  col = 1;
+  for (const AppliedEffect* e : fitted) {
+    const EffectModel& m = effect_model(e->effect);
+    m.from_coefficients(beta.segment(col, m.regressor_columns), out.derived);
+    col += m.regressor_columns;
+  }
+  for (const auto& e : effects)
+    if (const auto after = effect_model(e.effect).after_fit)
+      after(pr, e.params, out.yhat, out.derived);
 }
 
 }  // namespace
@@ -201,41 +156,7 @@ ModelOutput model_output(const Problem& pr, std::span<const AppliedEffect> effec
     if (pr.active_to < n) z.tail(n - pr.active_to) = pr.baseline_z.tail(n - pr.active_to);
   }
   if (pr.output_rc_s) z = signal::ac_couple(z, pr.dt_s, *pr.output_rc_s);
-  // Offset (and the periodic disturbance's cosine and sine) by weighted least squares.
-  const AppliedEffect* periodic = nullptr;
-  const AppliedEffect* drift = nullptr;
-  for (const auto& e : effects) {
-    if (e.effect == Effect::kPeriodicDisturbance) periodic = &e;
-    if (e.effect == Effect::kDrift) drift = &e;
-  }
-  const Eigen::Index n = z.size();
-  const bool shift = pr.level_shift_at > 0 && pr.level_shift_at < n;
-  Eigen::MatrixXd x(n, (periodic ? 3 : 1) + (shift ? 1 : 0));
-  x.col(0).setOnes();
-  if (shift) {
-    x.col(x.cols() - 1).head(pr.level_shift_at).setZero();
-    x.col(x.cols() - 1).tail(n - pr.level_shift_at).setOnes();
-  }
-  if (periodic) {
-    const Eigen::ArrayXd t =
-        Eigen::ArrayXd::LinSpaced(n, 0.0, static_cast<double>(n - 1)) * pr.dt_s;
-    x.col(1) = (kTwoPi * periodic->params[0] * t).cos().matrix();
-    x.col(2) = (kTwoPi * periodic->params[0] * t).sin().matrix();
-  }
-  const Eigen::VectorXd sw = pr.est_weight.sqrt().matrix();
-  const Eigen::VectorXd beta =
-      (sw.asDiagonal() * x).colPivHouseholderQr().solve(sw.asDiagonal() * (pr.y - z));
-  out.yhat = z + x * beta;
-  if (shift) out.derived.emplace_back("level_shift", beta(x.cols() - 1));
-  if (periodic) {
-    out.derived.emplace_back("amplitude", std::hypot(beta(1), beta(2)));
-    out.derived.emplace_back("phase_deg", std::atan2(-beta(2), beta(1)) * 180.0 / std::numbers::pi);
-  }
-  if (drift) {
-    const Eigen::VectorXd d = smooth_zero_phase(pr.y - out.yhat, drift->params[0], pr.dt_s);
-    out.yhat += d;
-    out.derived.emplace_back("drift_rms", std::sqrt(d.array().square().mean()));
-  }
+  fit_output(pr, effects, z, out);
   return out;
 }
 

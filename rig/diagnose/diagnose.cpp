@@ -13,6 +13,13 @@
 namespace rig::diagnose {
 namespace {
 
+using thresholds::kDriftMaterialFraction;
+using thresholds::kDriftMaterialGainPct;
+using thresholds::kDriftMaterialOfLevel;
+using thresholds::kOperatingLevelStds;
+using thresholds::kPairedInputSingles;
+using thresholds::kPairedWithDisturbance;
+
 using Candidate = std::vector<std::vector<AppliedEffect>>;  // starting points of one hypothesis
 
 Candidate single(Effect e, const Problem& pr, const Location& loc) {
@@ -61,7 +68,7 @@ std::vector<Effect> applicable(const Problem& pr, const Location& loc, const Dia
 std::vector<Candidate> pair_candidates(const std::vector<HypothesisFit>& singles) {
   std::vector<const HypothesisFit*> inputs, dists;
   for (const auto& h : singles) (has_input_side(h) ? inputs : dists).push_back(&h);
-  if (inputs.size() > 3) inputs.resize(3);
+  if (inputs.size() > kPairedInputSingles) inputs.resize(kPairedInputSingles);
   std::vector<Candidate> out;
   for (std::size_t i = 0; i < inputs.size(); ++i) {
     for (std::size_t j = i + 1; j < inputs.size(); ++j) {
@@ -70,7 +77,7 @@ std::vector<Candidate> pair_candidates(const std::vector<HypothesisFit>& singles
         continue;  // twins
       out.push_back({{inputs[i]->effects[0], inputs[j]->effects[0]}});
     }
-    for (std::size_t j = 0; j < dists.size() && i < 2; ++j)
+    for (std::size_t j = 0; j < dists.size() && i < kPairedWithDisturbance; ++j)
       out.push_back({{inputs[i]->effects[0], dists[j]->effects[0]}});
   }
   return out;
@@ -94,18 +101,8 @@ double disturbance_part_score(const std::vector<HypothesisFit>& hs, const Hypoth
   return best;
 }
 
-// A drift alone is material when its rms is at least this fraction of the input-driven
-// response's, or when modelling it raises the validation fit by kDriftMaterialGainPct: a
-// slow wander of a few kW on a set excited by +-3 % is the operating noise of a running set
-// (every plant recording has some), not a missing effect.
-// When the output carries its operating level (|mean| > 10 std, e.g. a power reading), a
-// drift must also exceed kDriftMaterialOfLevel of that level: wander within a power
-// transducer's accuracy (class 0.2-0.5 %) is no missing effect however small the
-// excitation (a commissioning test's is small on purpose).
-constexpr double kDriftMaterialFraction = 0.10;
-constexpr double kDriftMaterialGainPct = 3.0;
-constexpr double kDriftMaterialOfLevel = 0.002;
-
+// A drift alone is material when it is large against the input-driven response or the
+// operating level, or when modelling it raises the validation fit enough (thresholds.hpp).
 bool immaterial_drift(const HypothesisFit& h, const Problem& pr) {
   if (h.effects.size() != 1 || h.effects[0].effect != Effect::kDrift) return false;
   double rms = 0.0;
@@ -113,7 +110,7 @@ bool immaterial_drift(const HypothesisFit& h, const Problem& pr) {
     if (name == "drift_rms") rms = value;
   const double y_std = std::sqrt(pr.y.squaredNorm() / std::max<double>(1.0, pr.y.size()));
   const double level = std::abs(pr.y_level);
-  if (level > 10.0 * y_std && rms < kDriftMaterialOfLevel * level) return true;
+  if (level > kOperatingLevelStds * y_std && rms < kDriftMaterialOfLevel * level) return true;
   if (h.validation_fit_after - h.validation_fit_before >= kDriftMaterialGainPct) return false;
   return rms < kDriftMaterialFraction * pr.scales.z_std;
 }

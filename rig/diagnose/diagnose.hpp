@@ -19,6 +19,7 @@
 #include "rig/diagnose/augmented_model.hpp"
 #include "rig/diagnose/hypothesis_fit.hpp"
 #include "rig/diagnose/locate.hpp"
+#include "rig/diagnose/thresholds.hpp"
 
 namespace rig::diagnose {
 
@@ -31,7 +32,7 @@ struct DiagnoseInput {
 
 struct DiagnoseOptions {
   FitOptions fit;
-  double min_gain_pct = 0.2;  // validation score (after the penalty) to accept one
+  double min_gain_pct = thresholds::kMinGainPct;  // validation score (after the penalty)
   bool try_pairs = true;
   int threads = 2;
   std::vector<Effect> effects;  // empty: the whole library

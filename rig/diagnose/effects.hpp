@@ -10,6 +10,8 @@
 //         with the output feedback  v' = v(t - Td) - k3 z^3 - Fc tanh(z'/eps)
 //   z --> + periodic_disturbance + drift --> the recording's own AC coupling --> yhat
 // Parameters are in physical units; their names carry the unit.
+// Each effect's model is in its own file, rig/diagnose/effects/<word>.cpp, and the table of
+// them in effect_registry.hpp; the functions below answer from that table.
 #pragma once
 
 #include <array>

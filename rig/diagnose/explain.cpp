@@ -7,6 +7,8 @@
 #include <string>
 
 #include "rig/diagnose/diagnose.hpp"
+#include "rig/diagnose/effect_registry.hpp"
+#include "rig/diagnose/effects/common.hpp"
 
 namespace rig::diagnose {
 namespace {
@@ -52,107 +54,12 @@ std::string where_in_time_and_level(const DiagnoseResult& r) {
 }
 
 double derived(const HypothesisFit& h, const std::string& key) {
-  for (const auto& [k, v] : h.derived)
-    if (k == key) return v;
-  return std::nan("");
+  return effects::derived_or_nan(h, key);
 }
 
-// A limit inside an integrating loop loses position that the loop restores slowly.
-std::string in_loop_words(const std::vector<double>& p, std::size_t i, double dt_s) {
-  if (p.size() <= i || p[i] < 5.0 * dt_s) return "";
-  return fmt::format(
-      ", inside an integrating loop (a governor integrator with anti-windup) that restores the "
-      "lost position with a time constant of {:.3g} s",
-      p[i]);
-}
-
+// The effect's own sentence (rig/diagnose/effects/<word>.cpp).
 std::string what_effect_means(const AppliedEffect& e, const HypothesisFit& h, const Problem& pr) {
-  const auto& p = e.params;
-  const double su = pr.scales.u_std;
-  switch (e.effect) {
-    case Effect::kDeadTime:
-      return p[0] >= 0 ? fmt::format(
-                             "a dead time of {:.0f} ms is missing (the recording's is {:.0f} ms, "
-                             "the model's {:.0f} ms)",
-                             1e3 * p[0], 1e3 * (pr.tf.delay_s + p[0]), 1e3 * pr.tf.delay_s)
-                       : fmt::format("the model's dead time is {:.0f} ms too long", -1e3 * p[0]);
-    case Effect::kExtraLag:
-      return fmt::format(
-          "a first-order lag of {:.0f} ms (corner {:.2f} Hz) is missing in the plant", 1e3 * p[0],
-          1.0 / (2.0 * std::numbers::pi * p[0]));
-    case Effect::kSensorLag: {
-      const double ratio = derived(h, "noise_rolloff_ratio");
-      if (!std::isfinite(ratio)) {
-        // The corner is too near half the sample rate for two noise bands around it.
-        return fmt::format(
-            "the measurement lags by {:.0f} ms more than modelled (corner {:.1f} Hz, too near "
-            "half the sample rate for the noise to tell the transducer from the plant)",
-            1e3 * p[0], 1.0 / (2.0 * std::numbers::pi * p[0]));
-      }
-      return fmt::format(
-          "the measurement lags by {:.0f} ms more than modelled; the noise is filtered "
-          "too (noise above the corner is {:.2f} of that below), so it is the transducer",
-          1e3 * p[0], ratio);
-    }
-    case Effect::kResonance:
-      return fmt::format(
-          "an unmodelled resonance at {:.2f} Hz (damping ratio {:.3f}, gain x{:.2f} at its peak)",
-          p[0], p[1], p[2]);
-    case Effect::kAcCoupling:
-      return fmt::format(
-          "the output passed through an AC coupling with RC = {:.2f} s (corner {:.3f} Hz) "
-          "that the model lacks",
-          p[0], 1.0 / (2.0 * std::numbers::pi * p[0]));
-    case Effect::kDeadband:
-      return fmt::format(
-          "inputs within +-{:.3g} of the operating point ({:.0f} % of the input's standard "
-          "deviation) have no effect: a deadband",
-          p[0], 100.0 * p[0] / su);
-    case Effect::kBacklash:
-      return fmt::format(
-          "a reversal of the input is lost for {:.3g} ({:.0f} % of the input's standard "
-          "deviation): backlash of total width {:.3g}",
-          2 * p[0], 200.0 * p[0] / su, 2 * p[0]);
-    case Effect::kSaturation:
-      return fmt::format(
-          "the input is limited at +{:.3g} / -{:.3g} about the operating point "
-          "({:.1f} / {:.1f} standard deviations){}",
-          p[0], p[1], p[0] / su, p[1] / su, in_loop_words(p, 2, pr.dt_s));
-    case Effect::kRateLimit:
-      return fmt::format("the input cannot change faster than {:.3g} per second{}", p[0],
-                         in_loop_words(p, 1, pr.dt_s));
-    case Effect::kStaticNonlinearity:
-      return fmt::format(
-          "the static gain changes with level: at +1 standard deviation it is {:.2f}, at -1 "
-          "it is {:.2f} times the small-signal gain",
-          1 + p[0] + p[1], 1 - p[0] + p[1]);
-    case Effect::kNonlinearStiffness:
-      return fmt::format(
-          "the stiffness changes with amplitude: {:+.0f} % at one standard deviation of the output",
-          100.0 * p[0]);
-    case Effect::kCoulombFriction:
-      return fmt::format(
-          "a friction force of {:.3g} (in input units, {:.0f} % of the input's standard "
-          "deviation) opposes every motion",
-          p[0], 100.0 * p[0] / su);
-    case Effect::kLoadDamping: {
-      const auto m = dominant_mode(pr.tf);
-      return fmt::format(
-          "the mode at {:.2f} Hz is damped with a ratio of {:.3f}, not the model's {:.3f}",
-          m ? m->first : 0.0, p[0], m ? m->second : 0.0);
-    }
-    case Effect::kGainChange:
-      return fmt::format("the gain is {:.3f} times the model's ({:+.1f} %)", p[0],
-                         100.0 * (p[0] - 1.0));
-    case Effect::kPeriodicDisturbance:
-      return fmt::format(
-          "a periodic disturbance at {:.3f} Hz of amplitude {:.3g}, not caused by the input", p[0],
-          derived(h, "amplitude"));
-    case Effect::kDrift:
-      return fmt::format("a slow drift (time scale {:.0f} s, rms {:.3g}) not caused by the input",
-                         p[0], derived(h, "drift_rms"));
-  }
-  return "";
+  return effect_model(e.effect).explain(e, h, pr);
 }
 
 // An operating-point step found in the recording (find_level_shift).

@@ -6,6 +6,8 @@
 #include <unsupported/Eigen/NonLinearOptimization>
 #include <unsupported/Eigen/NumericalDiff>
 
+#include "rig/diagnose/effect_registry.hpp"
+
 namespace rig::diagnose {
 namespace {
 
@@ -86,7 +88,7 @@ int HypothesisFit::parameter_count() const {
   int n = 0;
   for (const auto& e : effects) {
     n += static_cast<int>(e.params.size());
-    if (e.effect == Effect::kPeriodicDisturbance) n += 2;  // amplitude and phase by LS
+    n += effect_model(e.effect).regressor_columns;  // e.g. amplitude and phase by LS
   }
   return n;
 }

@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "rig/diagnose/augmented_model.hpp"
+#include "rig/diagnose/thresholds.hpp"
 
 namespace rig::diagnose {
 
@@ -35,7 +36,7 @@ struct HypothesisFit {
 };
 
 struct FitOptions {
-  double penalty_pct_per_parameter = 0.25;
+  double penalty_pct_per_parameter = thresholds::kPenaltyPctPerParameter;
   int max_evaluations = 120;  // model simulations per start
 };
 

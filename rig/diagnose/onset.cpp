@@ -4,6 +4,14 @@
 #include "rig/diagnose/split.hpp"
 
 namespace rig::diagnose {
+
+using thresholds::kLevelShiftOfOutputStd;
+using thresholds::kLevelShiftSpreads;
+using thresholds::kOnsetHypotheses;
+using thresholds::kOnsetMinT;
+using thresholds::kOnsetQuietFraction;
+using thresholds::kOnsetWindows;
+
 namespace {
 
 struct ChangePoint {
@@ -16,7 +24,7 @@ ChangePoint change_point(const Problem& pr, const Eigen::VectorXd& base,
   const Eigen::Index n = pr.y.size();
   Eigen::Index start = 0;
   while (start < n && pr.est_weight(start) + pr.val_weight(start) <= 0.0) ++start;
-  const int nw = 40;
+  const int nw = kOnsetWindows;
   const Eigen::Index w = (n - start) / nw;
   ChangePoint cp;
   if (w < 16) return cp;
@@ -48,7 +56,7 @@ ChangePoint change_point(const Problem& pr, const Eigen::VectorXd& base,
     const double t = se > 0 ? (m2 - m1) / se : 0.0;
     const bool onset = t > 0;
     const double active = onset ? m2 : m1, quiet = onset ? m1 : m2;
-    if (std::abs(t) > std::max(4.0, best_t) && quiet < 0.25 * active) {
+    if (std::abs(t) > std::max(kOnsetMinT, best_t) && quiet < kOnsetQuietFraction * active) {
       best_t = std::abs(t);
       cp.found = true;
       cp.from = onset ? start + k * w : 0;
@@ -83,7 +91,9 @@ Eigen::Index find_level_shift(const Problem& pr, const Eigen::VectorXd& r) {
   const double spread = 1.4826 * median(v);
   Eigen::Index best = 0;
   const double peak = (d.array() - med).abs().maxCoeff(&best);
-  if (spread <= 0.0 || peak < 10.0 * spread || peak < 0.5 * pr.scales.z_std) return -1;
+  if (spread <= 0.0 || peak < kLevelShiftSpreads * spread ||
+      peak < kLevelShiftOfOutputStd * pr.scales.z_std)
+    return -1;
   return best + w;
 }
 
@@ -92,7 +102,7 @@ void refine_onsets(const Problem& pr, std::vector<HypothesisFit>& hs, const Eige
   if (pr.active_from > 0 || pr.active_to < pr.y.size()) return;  // already located in time
   int tried = 0;
   for (auto& h : hs) {
-    if (tried >= 3) break;
+    if (tried >= kOnsetHypotheses) break;
     if (h.yhat.size() != pr.y.size() || h.score <= 0.0 ||
         kind_of(h.effects.front().effect) == EffectKind::kDisturbance)
       continue;

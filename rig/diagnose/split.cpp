@@ -11,6 +11,17 @@
 #include "rig/fra/h1.hpp"
 
 namespace rig::diagnose {
+
+using thresholds::kGateMaxCoverage;
+using thresholds::kGateMinContiguity;
+using thresholds::kGateMinCoverage;
+using thresholds::kGateToEnd;
+using thresholds::kRolloffHighFrom;
+using thresholds::kRolloffHighTo;
+using thresholds::kRolloffLowFrom;
+using thresholds::kRolloffLowTo;
+using thresholds::kSensorLagRolloffRatio;
+
 namespace {
 
 void validate(const DiagnoseInput& in) {
@@ -82,12 +93,14 @@ void gate_to_windows(Problem& pr, const Location& loc) {
   double covered = 0.0;
   for (const auto& w : loc.windows) covered += w.to_s - w.from_s;
   const double total = pr.scales.duration_s;
-  if (covered < 0.05 * total || covered > 0.75 * total || covered < 0.6 * (to - from)) return;
+  if (covered < kGateMinCoverage * total || covered > kGateMaxCoverage * total ||
+      covered < kGateMinContiguity * (to - from))
+    return;
   const Eigen::Index n = pr.u.size();
   pr.active_from = std::clamp<Eigen::Index>(std::llround(from / pr.dt_s), 0, n);
   // A span reaching the last whole window runs to the end (the remainder is shorter).
   pr.active_to =
-      to >= 0.95 * total ? n : std::clamp<Eigen::Index>(std::llround(to / pr.dt_s), 0, n);
+      to >= kGateToEnd * total ? n : std::clamp<Eigen::Index>(std::llround(to / pr.dt_s), 0, n);
 }
 
 namespace {
@@ -112,13 +125,14 @@ void add_sensor_lag_twin(const Problem& pr, std::vector<HypothesisFit>& hs, cons
   wo.segment_length = welch_segment(pr.u.size());
   const Eigen::VectorXd r = pr.y - it->yhat;
   const fra::CrossSpectra s = fra::welch_cross_spectra(pr.u, r, pr.dt_s, wo);
-  const double ratio = band_mean(s, 2.0 * fc, std::min(4.0 * fc, 0.45 / pr.dt_s)) /
-                       band_mean(s, 0.25 * fc, 0.5 * fc);
+  const double ratio =
+      band_mean(s, kRolloffHighFrom * fc, std::min(kRolloffHighTo * fc, 0.45 / pr.dt_s)) /
+      band_mean(s, kRolloffLowFrom * fc, kRolloffLowTo * fc);
   HypothesisFit twin = *it;
   twin.effects[0].effect = Effect::kSensorLag;
   it->derived.emplace_back("noise_rolloff_ratio", ratio);
   twin.derived.emplace_back("noise_rolloff_ratio", ratio);
-  const bool sensor = std::isfinite(ratio) && ratio < 0.5;
+  const bool sensor = std::isfinite(ratio) && ratio < kSensorLagRolloffRatio;
   (sensor ? it->score : twin.score) -= fit.penalty_pct_per_parameter;
   hs.push_back(std::move(twin));
 }

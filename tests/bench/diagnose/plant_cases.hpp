@@ -12,8 +12,8 @@
 //   ac_coupling  the power signal AC-coupled (RC 5 s) and the sidecar saying so
 //   partial      the effect appears half-way through the record only
 // The truth is expressed in the units of the diagnosed effect's first parameter
-// (rig/diagnose/effects.cpp parameter_specs), converted from the plant parameter by the
-// plant's own scales (governor droop, rack position per % bias from the linearisation).
+// (its parameter_specs in rig/diagnose/effects/<effect>.cpp), converted from the plant parameter by
+// the plant's own scales (governor droop, rack position per % bias from the linearisation).
 #pragma once
 
 #include <cstdint>

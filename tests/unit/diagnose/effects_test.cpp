@@ -5,6 +5,7 @@
 
 #include "rig/diagnose/augmented_model.hpp"
 #include "rig/diagnose/concealed.hpp"
+#include "rig/diagnose/effect_registry.hpp"
 
 namespace rig::diagnose {
 namespace {
@@ -24,6 +25,26 @@ TEST(Effects, EveryWordRoundTripsAndHasParameters) {
     for (const auto& p : specs) EXPECT_LT(p.lo, p.hi) << to_string(e) << " " << p.name;
   }
   EXPECT_FALSE(effect_from_string("bogus"));
+}
+
+TEST(Effects, RegistryHoldsOneCompleteModelPerEffectInEnumOrder) {
+  const auto models = all_effect_models();
+  ASSERT_EQ(models.size(), kAllEffects.size());
+  for (std::size_t i = 0; i < models.size(); ++i) {
+    const EffectModel& m = *models[i];
+    EXPECT_EQ(m.id, kAllEffects[i]) << m.name;
+    EXPECT_EQ(&effect_model(m.id), &m) << m.name;
+    EXPECT_EQ(effect_model(std::string_view(m.name)), &m) << m.name;
+    EXPECT_TRUE(m.parameter_specs && m.seeds && m.explain) << m.name;
+    EXPECT_NE(std::string(m.description), "") << m.name;
+    // Each kind has exactly the application it needs.
+    EXPECT_EQ(m.apply_input != nullptr, m.kind == EffectKind::kInputNonlinearity) << m.name;
+    EXPECT_EQ(m.feedback != nullptr, m.kind == EffectKind::kFeedback) << m.name;
+    EXPECT_TRUE(m.kind == EffectKind::kLinear || m.apply_linear == nullptr) << m.name;
+    EXPECT_EQ(m.regressors != nullptr || m.after_fit != nullptr, m.kind == EffectKind::kDisturbance)
+        << m.name;
+    EXPECT_EQ(m.regressors != nullptr, m.regressor_columns > 0) << m.name;
+  }
 }
 
 TEST(Effects, DeadTimeAddsPhaseProportionalToFrequency) {

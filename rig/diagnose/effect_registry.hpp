@@ -1,0 +1,96 @@
+// The effect library of `rig diagnose` as one table (DESIGN.md section 9). Each effect's
+// knowledge lives in its own file under rig/diagnose/effects/: its word and kind, its
+// parameters (named with their unit, ranges from the data's scales), its starting points from
+// the location step, how it augments the baseline model (effects.hpp gives the signal path),
+// the sentence that explains a fitted value and the plant parameters it maps onto. The code
+// that fits, explains and maps hypotheses looks effects up here.
+#pragma once
+
+#include <Eigen/Core>
+#include <span>
+#include <string>
+#include <string_view>
+#include <utility>
+#include <vector>
+
+#include "rig/diagnose/effects.hpp"
+#include "rig/model/transfer_function.hpp"
+
+namespace rig::diagnose {
+
+struct Problem;
+struct Location;
+struct HypothesisFit;
+
+using Params = std::vector<double>;                           // as the effect's parameter_specs()
+using Derived = std::vector<std::pair<std::string, double>>;  // e.g. the disturbance amplitude
+
+// The output feedback of the feedback effects (augmented_model.cpp):
+//   v' = v(t - Td) - cubic z^3 - friction tanh(dz / friction_eps)
+struct FeedbackTerms {
+  double cubic = 0.0;
+  double friction = 0.0;
+  double friction_eps = 1.0;
+};
+
+// Where an effect's plant mapping writes (rig/cli/diagnose_plant.cpp: a plantsim plant).
+class PlantTarget {
+ public:
+  virtual ~PlantTarget() = default;
+  // The plant's value of a "block.name" key.
+  virtual double param(const std::string& key) const = 0;
+  // The value as changed so far, else the plant's.
+  virtual double current(const std::string& key) const = 0;
+  // Sets key to value (clamped to the plant's range); reason names the conversion.
+  virtual void set(const std::string& key, double value, const std::string& effect,
+                   const std::string& reason) = 0;
+  virtual void note(const std::string& text) = 0;
+};
+
+// What a plant mapping is given: the fitted effect, its hypothesis (the derived values), the
+// model it was fitted against and the recorded input.
+struct PlantContext {
+  const AppliedEffect& effect;
+  const HypothesisFit& hypothesis;
+  const model::TransferFunction& baseline;
+  const Eigen::VectorXd& u;
+};
+
+struct EffectModel {
+  Effect id = Effect::kGainChange;
+  const char* name = "";  // DESIGN.md section 9 word
+  EffectKind kind = EffectKind::kLinear;
+  const char* description = "";
+  std::vector<ParamSpec> (*parameter_specs)(const DataScales& scales) = nullptr;
+  std::vector<Params> (*seeds)(const Problem& problem, const Location& location) = nullptr;
+  // The change of the linear part (kLinear), if any.
+  void (*apply_linear)(model::TransferFunction& tf, const Params& p) = nullptr;
+  // The input nonlinearity v -> N(v) (kInputNonlinearity).
+  Eigen::VectorXd (*apply_input)(const Problem& problem, const Params& p,
+                                 Eigen::VectorXd v) = nullptr;
+  // Its terms of the output feedback (kFeedback).
+  void (*feedback)(const Problem& problem, const Params& p, FeedbackTerms& terms) = nullptr;
+  // A disturbance's part of the output's least-squares fit (augmented_model.cpp): columns
+  // beside the offset's, and what their fitted coefficients mean ...
+  int regressor_columns = 0;
+  void (*regressors)(const Problem& problem, const Params& p,
+                     Eigen::Ref<Eigen::MatrixXd> columns) = nullptr;
+  void (*from_coefficients)(const Eigen::VectorXd& coefficients, Derived& derived) = nullptr;
+  // ... and a correction of the fitted output after it.
+  void (*after_fit)(const Problem& problem, const Params& p, Eigen::VectorXd& yhat,
+                    Derived& derived) = nullptr;
+  // What the fitted effect means, with numbers (explain.cpp joins these).
+  std::string (*explain)(const AppliedEffect& effect, const HypothesisFit& hypothesis,
+                         const Problem& problem) = nullptr;
+  // The plant parameters that express it; nullptr: none does.
+  void (*map_to_plant)(const PlantContext& context, PlantTarget& plant) = nullptr;
+};
+
+// Throws std::out_of_range for a value outside the enum.
+const EffectModel& effect_model(Effect effect);
+// nullptr for an unknown word.
+const EffectModel* effect_model(std::string_view name);
+// In the order of kAllEffects.
+std::span<const EffectModel* const> all_effect_models();
+
+}  // namespace rig::diagnose

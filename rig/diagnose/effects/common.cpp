@@ -1,0 +1,43 @@
+#include "rig/diagnose/effects/common.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+
+#include "rig/diagnose/hypothesis_fit.hpp"
+
+namespace rig::diagnose::effects {
+
+Eigen::VectorXd vec(std::initializer_list<double> v) {
+  Eigen::VectorXd out(static_cast<Eigen::Index>(v.size()));
+  Eigen::Index i = 0;
+  for (double x : v) out(i++) = x;
+  return out;
+}
+
+double derived_or_nan(const HypothesisFit& h, const std::string& key) {
+  for (const auto& [k, v] : h.derived)
+    if (k == key) return v;
+  return std::nan("");
+}
+
+double derived_or(const HypothesisFit& h, const std::string& key, double fallback) {
+  for (const auto& [k, v] : h.derived)
+    if (k == key && std::isfinite(v)) return v;
+  return fallback;
+}
+
+double recovery_hi_s(const DataScales& s) {
+  return std::max(10.0 * s.dt_s, std::min(60.0, s.duration_s / 10.0));
+}
+
+std::string in_loop_words(const std::vector<double>& p, std::size_t i, double dt_s) {
+  if (p.size() <= i || p[i] < 5.0 * dt_s) return "";
+  return fmt::format(
+      ", inside an integrating loop (a governor integrator with anti-windup) that restores the "
+      "lost position with a time constant of {:.3g} s",
+      p[i]);
+}
+
+}  // namespace rig::diagnose::effects

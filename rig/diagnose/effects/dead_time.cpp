@@ -1,0 +1,66 @@
+// dead_time: a dead time the model lacks (or has too much of), extra_delay_s added to the
+// baseline's. Seeded from the slope of the phase error.
+// Plant: engine.dead_time_s = Td0 + extra_delay_s, Td0 the effective fuel dead time
+// (dead_time_s if > 0, else 30/N + 60/(n N)).
+#include <fmt/format.h>
+
+#include <algorithm>
+
+#include "rig/diagnose/diagnose.hpp"
+#include "rig/diagnose/effects/common.hpp"
+
+namespace rig::diagnose {
+namespace {
+
+std::vector<ParamSpec> specs(const DataScales& s) {
+  return {{"extra_delay_s", -s.delay_s, std::min(2.0, 0.05 * s.duration_s), false}};
+}
+
+std::vector<Params> seeds(const Problem&, const Location& loc) {
+  const FrequencyLocation& f = loc.freq;
+  return {{f.delay_from_phase_s}, {0.5 * f.delay_from_phase_s + 0.01}};
+}
+
+void apply(model::TransferFunction& tf, const Params& p) {
+  tf.delay_s = std::max(0.0, tf.delay_s + p[0]);
+}
+
+std::string meaning(const AppliedEffect& e, const HypothesisFit&, const Problem& pr) {
+  const auto& p = e.params;
+  return p[0] >= 0 ? fmt::format(
+                         "a dead time of {:.0f} ms is missing (the recording's is {:.0f} ms, "
+                         "the model's {:.0f} ms)",
+                         1e3 * p[0], 1e3 * (pr.tf.delay_s + p[0]), 1e3 * pr.tf.delay_s)
+                   : fmt::format("the model's dead time is {:.0f} ms too long", -1e3 * p[0]);
+}
+
+double effective_dead_time_s(const PlantTarget& p) {
+  const double td = p.param("engine.dead_time_s");
+  if (td > 0.0) return td;
+  const double n = p.param("engine.rpm");
+  return 30.0 / n + 60.0 / (p.param("engine.cylinders") * n);
+}
+
+void to_plant(const PlantContext& c, PlantTarget& m) {
+  const std::string name = to_string(c.effect.effect);
+  const auto& p = c.effect.params;
+  const double td0 = effective_dead_time_s(m);
+  m.set("engine.dead_time_s", std::max(td0 + p[0], 1e-4), name,
+        fmt::format("fuel dead time {:.4g} s + extra_delay_s {:.4g} s", td0, p[0]));
+}
+
+}  // namespace
+
+const EffectModel kDeadTimeEffect{
+    .id = Effect::kDeadTime,
+    .name = "dead_time",
+    .kind = EffectKind::kLinear,
+    .description = "a transport delay the model lacks or has too much of",
+    .parameter_specs = specs,
+    .seeds = seeds,
+    .apply_linear = apply,
+    .explain = meaning,
+    .map_to_plant = to_plant,
+};
+
+}  // namespace rig::diagnose

@@ -1,0 +1,90 @@
+// saturation: limits on the input about the operating point, plain (recovery_s = dt) or
+// inside an integrating loop that restores the lost position with recovery_s (blocks.hpp).
+// Plant: gov.tmax_pu = rack0 + (u0 + upper) a_r, gov.tmin_pu = rack0 + (u0 - lower) a_r,
+// rack0 = the steady rack (P0/P_r)/c at zero bias, u0 the recording's mean bias (a_r and c
+// from common.hpp); a limit outside the recorded excursion is not identified: unchanged.
+// recovery_s is the plant loop's own restoring time: not mapped.
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <utility>
+
+#include "rig/diagnose/blocks.hpp"
+#include "rig/diagnose/diagnose.hpp"
+#include "rig/diagnose/effects/common.hpp"
+
+namespace rig::diagnose {
+namespace {
+
+// recovery_s: dt = a plain limit; longer = inside an integrating loop (blocks.hpp).
+std::vector<ParamSpec> specs(const DataScales& s) {
+  const double su = std::max(s.u_std, 1e-12);
+  return {{"upper_limit", 0.05 * su, 6.0 * su, true},
+          {"lower_limit_magnitude", 0.05 * su, 6.0 * su, true},
+          {"recovery_s", s.dt_s, effects::recovery_hi_s(s), true}};
+}
+
+std::vector<Params> seeds(const Problem& pr, const Location&) {
+  const DataScales& s = pr.scales;
+  const double su = s.u_std;
+  return {{1.5 * su, 1.5 * su, s.dt_s}, {2.5 * su, 2.5 * su, s.dt_s}, {1.5 * su, 2.0 * su, 3.0}};
+}
+
+Eigen::VectorXd apply(const Problem& pr, const Params& p, Eigen::VectorXd v) {
+  return p.size() > 2 ? saturate_in_loop(v, -p[1], p[0], p[2], pr.dt_s) : saturate(v, -p[1], p[0]);
+}
+
+std::string meaning(const AppliedEffect& e, const HypothesisFit&, const Problem& pr) {
+  const auto& p = e.params;
+  const double su = pr.scales.u_std;
+  return fmt::format(
+      "the input is limited at +{:.3g} / -{:.3g} about the operating point "
+      "({:.1f} / {:.1f} standard deviations){}",
+      p[0], p[1], p[0] / su, p[1] / su, effects::in_loop_words(p, 2, pr.dt_s));
+}
+
+// Limits about the recording's mean input u0 (the operating point diagnose removes): the
+// rack there is rack0 + u0 a_r. A limit beyond the recorded excursion never acted, so the
+// fit did not identify it: that side is left as it was.
+void to_plant(const PlantContext& c, PlantTarget& m) {
+  const auto& p = c.effect.params;
+  const Eigen::VectorXd& u = c.u;
+  const double u0 = u.size() ? u.mean() : 0.0;
+  const double up = u.size() ? u.maxCoeff() - u0 : INFINITY;
+  const double down = u.size() ? u0 - u.minCoeff() : INFINITY;
+  const double a_r = effects::rack_pu_per_pct(m);
+  const double rack = effects::steady_rack_pu(m) + u0 * a_r;
+  const std::pair<const char*, double> sides[] = {{"upper_limit", p[0]},
+                                                  {"lower_limit_magnitude", p[1]}};
+  for (const auto& [word, lim] : sides) {
+    const bool upper = std::string(word) == "upper_limit";
+    const char* key = upper ? "gov.tmax_pu" : "gov.tmin_pu";
+    if (lim >= (upper ? up : down)) {
+      m.note(
+          fmt::format("saturation: {} {:.4g} % lies beyond the recorded input ({:.4g} %); "
+                      "{} left unchanged",
+                      word, lim, upper ? up : down, key));
+      continue;
+    }
+    m.set(key, rack + (upper ? lim : -lim) * a_r, "saturation",
+          fmt::format("rack at the mean bias {:.4g} pu {} {} {:.4g} % x {:.4g} pu/%", rack,
+                      upper ? "+" : "-", word, lim, a_r));
+  }
+}
+
+}  // namespace
+
+const EffectModel kSaturationEffect{
+    .id = Effect::kSaturation,
+    .name = "saturation",
+    .kind = EffectKind::kInputNonlinearity,
+    .description = "limits on the input (the actuator's travel), possibly inside a loop",
+    .parameter_specs = specs,
+    .seeds = seeds,
+    .apply_input = apply,
+    .explain = meaning,
+    .map_to_plant = to_plant,
+};
+
+}  // namespace rig::diagnose

@@ -1,0 +1,79 @@
+// The decision thresholds of `rig diagnose` in one place, each with its reason. Scores and
+// gains are in percentage points of the validation fit (DESIGN.md 5); ratios are plain.
+#pragma once
+
+#include <cstddef>
+
+namespace rig::diagnose::thresholds {
+
+// --- Verdict (diagnose.cpp) ---
+// A hypothesis can be the verdict when its validation score (gain minus penalty) reaches
+// this: below it the effect does not make the model better on the data it was not fitted to
+// (the default of DiagnoseOptions::min_gain_pct).
+inline constexpr double kMinGainPct = 0.2;
+// Each fitted parameter costs this much validation gain, so a parameter that buys less is
+// over-fitting and the simpler hypothesis wins (the default of
+// FitOptions::penalty_pct_per_parameter).
+inline constexpr double kPenaltyPctPerParameter = 0.25;
+
+// --- Pairs (diagnose.cpp) ---
+// Only the best input-side singles are paired with each other (every pair is a full fit).
+inline constexpr std::size_t kPairedInputSingles = 3;
+// Of those, the best this many are also paired with each detected disturbance.
+inline constexpr std::size_t kPairedWithDisturbance = 2;
+
+// --- Drift materiality (diagnose.cpp) ---
+// A drift alone is material when its rms is at least this fraction of the input-driven
+// response's: a slow wander of a few kW on a set excited by +-3 % is the operating noise of
+// a running set (every plant recording has some), not a missing effect.
+inline constexpr double kDriftMaterialFraction = 0.10;
+// ... or when modelling it raises the validation fit by this much.
+inline constexpr double kDriftMaterialGainPct = 3.0;
+// An output carries its operating level when |mean| exceeds this many standard deviations
+// (e.g. a power reading) ...
+inline constexpr double kOperatingLevelStds = 10.0;
+// ... and then a drift must also exceed this fraction of that level: wander within a power
+// transducer's accuracy (class 0.2-0.5 %) is no missing effect however small the excitation
+// (a commissioning test's is small on purpose).
+inline constexpr double kDriftMaterialOfLevel = 0.002;
+
+// --- The extra_lag / sensor_lag twins (split.cpp) ---
+// The residual's noise PSD above the corner fc over that below is about 1 for noise that
+// bypassed the lag and about |1/(1 + j 3)|^2 = 0.1 for noise inside it; below this ratio the
+// lag is the transducer's.
+inline constexpr double kSensorLagRolloffRatio = 0.5;
+// The bands compared, in multiples of fc: [2 fc, 4 fc] (capped below Nyquist) over
+// [fc/4, fc/2], an octave each, far enough from the corner for the lag to show.
+inline constexpr double kRolloffHighFrom = 2.0;
+inline constexpr double kRolloffHighTo = 4.0;
+inline constexpr double kRolloffLowFrom = 0.25;
+inline constexpr double kRolloffLowTo = 0.5;
+
+// --- Effects present in part of the record (split.cpp gate_to_windows, onset.cpp) ---
+// The residual's windows out of bounds gate the input-side effects to their span when they
+// cover at least this fraction of the record (too little to fit on) ...
+inline constexpr double kGateMinCoverage = 0.05;
+// ... at most this fraction (more is most of the record: fit it all) ...
+inline constexpr double kGateMaxCoverage = 0.75;
+// ... and at least this fraction of the span they bound (mostly contiguous).
+inline constexpr double kGateMinContiguity = 0.6;
+// A span reaching this fraction of the record runs to its end (the last window is shorter).
+inline constexpr double kGateToEnd = 0.95;
+// Onset search: the hypothesis' gain per window over this many windows ...
+inline constexpr int kOnsetWindows = 40;
+// ... changes at a point with a two-sample |t| beyond this: a clear step, not the
+// fluctuation of the window gains ...
+inline constexpr double kOnsetMinT = 4.0;
+// ... with the quiet side gaining under this fraction of the active side.
+inline constexpr double kOnsetQuietFraction = 0.25;
+// Only the best input-side hypotheses are searched for an onset (each refit is a full fit).
+inline constexpr int kOnsetHypotheses = 3;
+
+// --- Operating-point steps (onset.cpp find_level_shift) ---
+// A step's |d_k| must exceed this many robust spreads of d (drift and noise move d smoothly
+// and everywhere, a step only near one k) ...
+inline constexpr double kLevelShiftSpreads = 10.0;
+// ... and this fraction of the model output's std: large against the input-driven response.
+inline constexpr double kLevelShiftOfOutputStd = 0.5;
+
+}  // namespace rig::diagnose::thresholds
