@@ -21,6 +21,19 @@ Eigen::VectorXd backlash(const Eigen::VectorXd& u, double b) {
   return v;
 }
 
+Eigen::VectorXd bouc_wen(const Eigen::VectorXd& u, double w, double r) {
+  Eigen::VectorXd v(u.size());
+  const double beta = 1.0 / (w * (1.0 + r)), gamma = r * beta;
+  double z = 0.0;
+  for (Eigen::Index k = 0; k < u.size(); ++k) {
+    const double du = k > 0 ? u(k) - u(k - 1) : 0.0;
+    z += du - beta * std::abs(du) * z - gamma * du * std::abs(z);
+    z = std::clamp(z, -w, w);  // an increment larger than w would overshoot the envelope
+    v(k) = u(k) - z;
+  }
+  return v;
+}
+
 Eigen::VectorXd saturate(const Eigen::VectorXd& u, double lower, double upper) {
   return u.cwiseMax(lower).cwiseMin(upper);
 }

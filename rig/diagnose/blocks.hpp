@@ -15,6 +15,13 @@ Eigen::VectorXd deadband(const Eigen::VectorXd& u, double half_width);
 // Backlash (play operator) of half-width b: v_k = min(max(v_{k-1}, u_k - b), u_k + b),
 // starting engaged at v_0 = u_0.
 Eigen::VectorXd backlash(const Eigen::VectorXd& u, double half_width);
+// Bouc-Wen hysteresis (n = 1) as an input operator: v = u - z with
+//   dz = du - beta |du| z - gamma du |z|,  beta = 1 / (w (1 + r)), gamma = r beta,
+// so z saturates at +-w (a lag of w behind every sustained movement, like a play of
+// half-width w) and the shape ratio r = gamma/beta in (-1, 1] sets how smoothly it engages
+// (r = 1: a play whose return is linear at once; r near -1: a slow, rounded engagement).
+// Rate-independent: each step applies the increment du_k = u_k - u_{k-1}; z_0 = 0.
+Eigen::VectorXd bouc_wen(const Eigen::VectorXd& u, double half_width, double shape_ratio);
 // Hard limits: v = min(max(u, lower), upper).
 Eigen::VectorXd saturate(const Eigen::VectorXd& u, double lower, double upper);
 // Rate limit r: v_k = v_{k-1} + clamp(u_k - v_{k-1}, -r dt, r dt), v_0 = u_0.

@@ -71,6 +71,8 @@ std::vector<double> true_params(Effect e, const DataScales& s, const model::Tran
       return {0.73};
     case Effect::kDrift:
       return {30.0};
+    case Effect::kHysteresis:
+      return {0.3 * su, 0.0};
   }
   return {};
 }
@@ -128,6 +130,9 @@ Eigen::VectorXd true_output(const ConcealedSpec& spec, const model::TransferFunc
       break;
     case Effect::kBacklash:
       uf = backlash(uf, p[0]);
+      break;
+    case Effect::kHysteresis:
+      uf = bouc_wen(uf, p[0], p[1]);
       break;
     case Effect::kSaturation:
       uf = saturate(uf, -p[1], p[0]);

@@ -28,7 +28,8 @@ constexpr std::array<const EffectModel*, kAllEffects.size()> kTable = {&kDeadTim
                                                                        &kLoadDampingEffect,
                                                                        &kGainChangeEffect,
                                                                        &kPeriodicDisturbanceEffect,
-                                                                       &kDriftEffect};
+                                                                       &kDriftEffect,
+                                                                       &kHysteresisEffect};
 
 std::size_t index_of(Effect effect) { return static_cast<std::size_t>(effect); }
 

@@ -39,9 +39,10 @@ enum class Effect {
   kGainChange,
   kPeriodicDisturbance,
   kDrift,
+  kHysteresis,
 };
 
-inline constexpr std::array<Effect, 16> kAllEffects = {Effect::kDeadTime,
+inline constexpr std::array<Effect, 17> kAllEffects = {Effect::kDeadTime,
                                                        Effect::kExtraLag,
                                                        Effect::kResonance,
                                                        Effect::kAcCoupling,
@@ -56,7 +57,8 @@ inline constexpr std::array<Effect, 16> kAllEffects = {Effect::kDeadTime,
                                                        Effect::kLoadDamping,
                                                        Effect::kGainChange,
                                                        Effect::kPeriodicDisturbance,
-                                                       Effect::kDrift};
+                                                       Effect::kDrift,
+                                                       Effect::kHysteresis};
 
 // DESIGN.md section 9 word ("dead_time", ...).
 const char* to_string(Effect effect);

@@ -20,6 +20,7 @@ extern const EffectModel kAcCouplingEffect;
 extern const EffectModel kSensorLagEffect;
 extern const EffectModel kDeadbandEffect;
 extern const EffectModel kBacklashEffect;
+extern const EffectModel kHysteresisEffect;
 extern const EffectModel kSaturationEffect;
 extern const EffectModel kRateLimitEffect;
 extern const EffectModel kStaticNonlinearityEffect;

@@ -85,5 +85,25 @@ TEST(Blocks, ZeroPhaseSmootherKeepsAConstantAndKillsAFastSine) {
   EXPECT_NEAR(s(2500), 3.0, 0.01);
 }
 
+// Bouc-Wen: a sustained movement lags by the half-width, a reversal returns linearly when
+// the shape ratio is 1 (a play), and the loop encloses area (it is hysteretic).
+TEST(Blocks, BoucWenLagsByItsHalfWidthAndEnclosesALoop) {
+  const int n = 2000;
+  Eigen::VectorXd u(n);
+  for (int k = 0; k < n; ++k) u(k) = std::sin(2.0 * M_PI * k / 1000.0);  // two cycles
+  const double w = 0.1;
+  const Eigen::VectorXd v = bouc_wen(u, w, 1.0);
+  // At the end of the first rise (k = 250, u = 1) v lags by almost w.
+  EXPECT_NEAR(u(250) - v(250), w, 0.01 * w);
+  // At the zero crossings of the second cycle the rising and falling outputs differ.
+  EXPECT_GT(std::abs(v(1000) - v(1500)), 1.5 * w);
+  // Never more than w behind.
+  EXPECT_LE((u - v).cwiseAbs().maxCoeff(), w * (1.0 + 1e-12));
+  // Just after the reversal at the bottom (k = 750) the play holds (its lag shrinks only as u
+  // rises), while a rounder loop (shape -0.5) already follows: its lag shrinks faster.
+  const Eigen::VectorXd round = bouc_wen(u, w, -0.5);
+  EXPECT_LT(std::abs(u(770) - round(770)), std::abs(u(770) - v(770)) - 0.01 * w);
+}
+
 }  // namespace
 }  // namespace rig::diagnose
