@@ -7,6 +7,7 @@
 
 #include "rig/diagnose/blocks.hpp"
 #include "rig/diagnose/effect_registry.hpp"
+#include "rig/diagnose/placement.hpp"
 #include "rig/signal/ac_coupling.hpp"
 
 namespace rig::diagnose {
@@ -130,27 +131,62 @@ void finish_problem(Problem& pr) {
   if (pr.active_to < 0 || pr.active_to > n) pr.active_to = n;
 }
 
+namespace {
+
+// The output of the linear part for the input v, through the in-loop nonlinearity `loop`
+// when there is one (placement.hpp), with the feedback effects' loop when there are any.
+Eigen::VectorXd linear_output(const Problem& pr, std::span<const AppliedEffect> effects,
+                              const model::TransferFunction& tf, const AppliedEffect* loop,
+                              Eigen::VectorXd v, bool feedback) {
+  model::TransferFunction g = tf;
+  if (loop) {
+    const double lag_s = loop->place_params.at(0);
+    v = apply_input(pr, *loop, front_signal(v, lag_s, pr.dt_s));
+    g = rest_after_front(tf, lag_s);
+  }
+  return feedback ? simulate_with_feedback(g, v, pr.dt_s, feedback_of(pr, effects))
+                  : model::simulate(g, v, pr.dt_s);
+}
+
+// The output-placed nonlinearities act on z in the bias's static scale.
+void apply_at_output(const Problem& pr, std::span<const AppliedEffect> effects,
+                     Eigen::VectorXd& z) {
+  const double g0 = pr.scales.dc_gain;
+  for (const auto& e : effects)
+    if (kind_of(e.effect) == EffectKind::kInputNonlinearity && e.place == Place::kOutput)
+      z = g0 * apply_input(pr, e, z / g0);
+}
+
+}  // namespace
+
 ModelOutput model_output(const Problem& pr, std::span<const AppliedEffect> effects) {
   ModelOutput out;
   const DataScales& s = pr.scales;
   bool input_side = false, feedback = false;
+  const AppliedEffect* loop = nullptr;
   Eigen::VectorXd v = pr.u;
   for (const auto& e : effects) {
-    if (e.params.size() != parameter_specs(e.effect, s).size())
+    if (e.params.size() != parameter_specs(e.effect, s).size() ||
+        e.place_params.size() != place_specs(e.place, s).size())
       throw std::invalid_argument(std::string("model_output: wrong parameter count for ") +
                                   to_string(e.effect));
     const EffectKind kind = kind_of(e.effect);
     input_side = input_side || kind != EffectKind::kDisturbance;
     feedback = feedback || kind == EffectKind::kFeedback;
-    if (kind == EffectKind::kInputNonlinearity) v = apply_input(pr, e, std::move(v));
+    if (kind != EffectKind::kInputNonlinearity) continue;
+    if (e.place == Place::kInput) v = apply_input(pr, e, std::move(v));
+    if (e.place == Place::kInLoop) {
+      if (loop) throw std::invalid_argument("model_output: two effects in the loop");
+      loop = &e;
+    }
   }
   out.tf = augmented_tf(pr.tf, effects);
   Eigen::VectorXd z;
   if (!input_side) {
     z = pr.baseline_z;
   } else {
-    z = feedback ? simulate_with_feedback(out.tf, v, pr.dt_s, feedback_of(pr, effects))
-                 : model::simulate(out.tf, v, pr.dt_s);
+    z = linear_output(pr, effects, out.tf, loop, std::move(v), feedback);
+    apply_at_output(pr, effects, z);
     const Eigen::Index n = z.size();
     if (pr.active_from > 0) z.head(pr.active_from) = pr.baseline_z.head(pr.active_from);
     if (pr.active_to < n) z.tail(n - pr.active_to) = pr.baseline_z.tail(n - pr.active_to);

@@ -42,7 +42,7 @@ std::vector<double> true_params(Effect e, const DataScales& s, const model::Tran
     case Effect::kExtraLag:
       return {0.08};
     case Effect::kResonance:
-      return {3.2, 0.05, 2.5};
+      return {3.2, 0.05, 2.5, 1.0};
     case Effect::kAcCoupling:
       return {3.0};
     case Effect::kSensorLag:
@@ -56,7 +56,7 @@ std::vector<double> true_params(Effect e, const DataScales& s, const model::Tran
     case Effect::kRateLimit:
       return {0.4 * s.u_rate_std};
     case Effect::kStaticNonlinearity:
-      return {0.25, -0.04};
+      return {0.25, -0.04, 0.0};
     // Softening, as the synchronising power's sin(delta): hardening would destabilise the
     // lagged loop of this plant (Routh: 3 k3 z^2 K < 0.65) at the excitation's peaks.
     case Effect::kNonlinearStiffness:

@@ -8,7 +8,9 @@
 #include <stdexcept>
 #include <thread>
 
+#include "rig/diagnose/placement.hpp"
 #include "rig/diagnose/split.hpp"
+#include "rig/diagnose/timing.hpp"
 
 namespace rig::diagnose {
 namespace {
@@ -19,13 +21,19 @@ using thresholds::kDriftMaterialOfLevel;
 using thresholds::kOperatingLevelStds;
 using thresholds::kPairedInputSingles;
 using thresholds::kPairedWithDisturbance;
+using thresholds::kDominantDisturbanceGainPct;
 
 using Candidate = std::vector<std::vector<AppliedEffect>>;  // starting points of one hypothesis
 
-Candidate single(Effect e, const Problem& pr, const Location& loc) {
-  Candidate c;
-  for (auto& p : seeds_for(e, pr, loc)) c.push_back({AppliedEffect{e, p}});
-  return c;
+// One effect's hypotheses: an input-side nonlinearity at each place it can sit
+// (placement.hpp), any other effect once.
+std::vector<Candidate> singles(Effect e, const Problem& pr, const Location& loc) {
+  if (kind_of(e) != EffectKind::kInputNonlinearity) return {placed_starts(e, Place::kInput, pr, loc)};
+  std::vector<Candidate> out;
+  for (Place place : kAllPlaces)
+    if (place != Place::kInLoop || in_loop_possible(pr.tf))
+      out.push_back(placed_starts(e, place, pr, loc));
+  return out;
 }
 
 std::vector<HypothesisFit> fit_all(const Problem& pr, const std::vector<Candidate>& cands,
@@ -64,21 +72,35 @@ std::vector<Effect> applicable(const Problem& pr, const Location& loc, const Dia
   return out;
 }
 
-// Pairs of the best input-side singles, and of those with a detected disturbance.
+// Pairs of the best input-side singles (the best place of each effect), and of those with a
+// detected disturbance; every input-side effect with a disturbance that dominates the
+// residual (its single's score, fitted without it, says little then).
 std::vector<Candidate> pair_candidates(const std::vector<HypothesisFit>& singles) {
-  std::vector<const HypothesisFit*> inputs, dists;
-  for (const auto& h : singles) (has_input_side(h) ? inputs : dists).push_back(&h);
-  if (inputs.size() > kPairedInputSingles) inputs.resize(kPairedInputSingles);
+  std::vector<const HypothesisFit*> inputs, dists;  // singles are ranked
+  for (const auto& h : singles) {
+    if (!has_input_side(h)) {
+      dists.push_back(&h);
+      continue;
+    }
+    const bool seen = std::any_of(inputs.begin(), inputs.end(), [&](const HypothesisFit* g) {
+      return g->effects[0].effect == h.effects[0].effect;
+    });
+    if (!seen) inputs.push_back(&h);
+  }
+  const bool dominant = !dists.empty() && dists.front()->score >= kDominantDisturbanceGainPct;
+  const auto lag = [](Effect e) { return e == Effect::kExtraLag || e == Effect::kSensorLag; };
   std::vector<Candidate> out;
   for (std::size_t i = 0; i < inputs.size(); ++i) {
-    for (std::size_t j = i + 1; j < inputs.size(); ++j) {
-      const auto lag = [](Effect e) { return e == Effect::kExtraLag || e == Effect::kSensorLag; };
-      if (lag(inputs[i]->effects[0].effect) && lag(inputs[j]->effects[0].effect))
-        continue;  // twins
-      out.push_back({{inputs[i]->effects[0], inputs[j]->effects[0]}});
+    const AppliedEffect& a = inputs[i]->effects[0];
+    for (std::size_t j = i + 1; j < std::min(inputs.size(), kPairedInputSingles); ++j) {
+      const AppliedEffect& b = inputs[j]->effects[0];
+      if (i >= kPairedInputSingles || (lag(a.effect) && lag(b.effect))) continue;  // twins
+      if (a.place == Place::kInLoop && b.place == Place::kInLoop) continue;  // one front lag
+      out.push_back({{a, b}});
     }
-    for (std::size_t j = 0; j < dists.size() && i < kPairedWithDisturbance; ++j)
-      out.push_back({{inputs[i]->effects[0], dists[j]->effects[0]}});
+    for (std::size_t j = 0; j < dists.size(); ++j)
+      if ((i < kPairedWithDisturbance) || (dominant && j == 0))
+        out.push_back({{a, dists[j]->effects[0]}});
   }
   return out;
 }
@@ -115,6 +137,12 @@ bool immaterial_drift(const HypothesisFit& h, const Problem& pr) {
   return rms < kDriftMaterialFraction * pr.scales.z_std;
 }
 
+// A dead time of at most half a sample alone is the sampling convention (timing.hpp).
+bool sampling_convention_only(const HypothesisFit& h, const Problem& pr) {
+  return h.effects.size() == 1 && h.effects[0].effect == Effect::kDeadTime &&
+         std::abs(h.effects[0].params[0]) <= 0.5 * pr.dt_s;
+}
+
 // The best hypothesis above min_gain; when the input tests failed, one with an input-side
 // effect that adds min_gain to what its disturbance alone explains, unless there is none
 // (then a disturbance alone explains it).
@@ -124,7 +152,7 @@ int choose_raw(const DiagnoseResult& r, double min_gain) {
   for (std::size_t i = 0; i < r.hypotheses.size(); ++i) {
     const auto& h = r.hypotheses[i];
     if (h.score < min_gain) break;
-    if (immaterial_drift(h, r.problem)) continue;
+    if (immaterial_drift(h, r.problem) || sampling_convention_only(h, r.problem)) continue;
     if (best_any < 0) best_any = static_cast<int>(i);
     if (!input) return static_cast<int>(i);
     if (has_input_side(h) && h.score - disturbance_part_score(r.hypotheses, h) >= min_gain)
@@ -161,6 +189,24 @@ std::string verdict_of(const HypothesisFit& h) {
   return to_string(h.effects.front().effect);
 }
 
+// The baseline's output (with an operating-point step found in the residual, fitted as a
+// second offset by every model, the baseline too) and the location of its residual.
+ModelOutput locate_baseline(Problem& pr, DiagnoseResult& r) {
+  pr.level_shift_at = find_level_shift(pr, pr.y - model_output(pr, {}).yhat);
+  ModelOutput base = model_output(pr, {});
+  for (const auto& [name, value] : base.derived)
+    if (name == "level_shift") {
+      r.level_shift_time_s = static_cast<double>(pr.level_shift_at) * pr.dt_s;
+      r.level_shift = value;
+    }
+  r.baseline_yhat = base.yhat;
+  const Eigen::ArrayXd used = pr.est_weight + pr.val_weight;
+  r.fit_before_pct = weighted_fit_pct(pr.y, base.yhat, used);
+  r.validation_fit_before_pct = weighted_fit_pct(pr.y, base.yhat, pr.val_weight);
+  r.location = locate(pr, base.yhat);
+  return base;
+}
+
 }  // namespace
 
 const HypothesisFit* DiagnoseResult::chosen() const {
@@ -172,23 +218,24 @@ DiagnoseResult diagnose(const DiagnoseInput& in, const DiagnoseOptions& o) {
   DiagnoseResult r;
   r.problem = prepare_problem(in, &r.blocks, &r.warmup);
   Problem& pr = r.problem;
-  // An operating-point step is fitted as a second offset by every model, the baseline too.
-  pr.level_shift_at = find_level_shift(pr, pr.y - model_output(pr, {}).yhat);
-  const ModelOutput base = model_output(pr, {});
-  for (const auto& [name, value] : base.derived)
-    if (name == "level_shift") {
-      r.level_shift_time_s = static_cast<double>(pr.level_shift_at) * pr.dt_s;
-      r.level_shift = value;
+  // The sampling convention (timing.hpp): when the baseline shifted by at most half a sample
+  // explains the recording, that is the answer (none); otherwise the effects are fitted
+  // against the model as given, so that the shift takes nothing of theirs.
+  Problem shifted = pr;
+  if (const double delta = absorb_timing_nuisance(shifted); delta != 0.0) {
+    DiagnoseResult s;
+    locate_baseline(shifted, s);
+    if (!s.location.input_mismatch && !s.location.disturbance) {
+      pr = std::move(shifted);
+      r.timing_nuisance_s = delta;
     }
-  r.baseline_yhat = base.yhat;
-  Eigen::ArrayXd used = pr.est_weight + pr.val_weight;
-  r.fit_before_pct = weighted_fit_pct(pr.y, base.yhat, used);
-  r.validation_fit_before_pct = weighted_fit_pct(pr.y, base.yhat, pr.val_weight);
-  r.location = locate(pr, base.yhat);
+  }
+  const ModelOutput base = locate_baseline(pr, r);
   gate_to_windows(pr, r.location);
   if (r.location.input_mismatch || r.location.disturbance) {
     std::vector<Candidate> cands;
-    for (Effect e : applicable(pr, r.location, o)) cands.push_back(single(e, pr, r.location));
+    for (Effect e : applicable(pr, r.location, o))
+      for (auto& c : singles(e, pr, r.location)) cands.push_back(std::move(c));
     r.hypotheses = fit_all(pr, cands, base.yhat, o);
     rank(r.hypotheses);
     refine_onsets(pr, r.hypotheses, base.yhat, o.fit);

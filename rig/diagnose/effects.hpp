@@ -2,8 +2,9 @@
 // augmentation of the baseline model with a few physical parameters.
 //
 // Signal path of an augmented model (effects of each kind compose in this order):
-//   u --> input nonlinearity N (deadband, backlash, saturation, rate_limit,
-//         static_nonlinearity) --> v
+//   u --> input nonlinearity N (deadband, backlash, hysteresis, saturation, rate_limit,
+//         static_nonlinearity) --> v; or the same nonlinearity inside the loop or on the
+//         output (placement.hpp)
 //   v --> baseline G(s) e^{-s Td} modified by the linear effects (dead_time, extra_lag,
 //         sensor_lag, resonance, ac_coupling, load_damping, gain_change) --> z,
 //         or, with nonlinear_stiffness / coulomb_friction, the rational part in a loop
@@ -90,9 +91,17 @@ struct DataScales {
 
 std::vector<ParamSpec> parameter_specs(Effect effect, const DataScales& scales);
 
+// Where an input-side nonlinearity acts (placement.hpp); other effects are at kInput.
+enum class Place { kInput, kInLoop, kOutput };
+const char* to_string(Place place);
+// The parameters a place adds to its effect's (in the loop: front_lag_s).
+std::vector<ParamSpec> place_specs(Place place, const DataScales& scales);
+
 struct AppliedEffect {
   Effect effect = Effect::kGainChange;
   std::vector<double> params;  // as parameter_specs()
+  Place place = Place::kInput;
+  std::vector<double> place_params;  // as place_specs()
 };
 
 }  // namespace rig::diagnose

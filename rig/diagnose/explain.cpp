@@ -59,7 +59,18 @@ double derived(const HypothesisFit& h, const std::string& key) {
 
 // The effect's own sentence (rig/diagnose/effects/<word>.cpp).
 std::string what_effect_means(const AppliedEffect& e, const HypothesisFit& h, const Problem& pr) {
-  return effect_model(e.effect).explain(e, h, pr);
+  std::string s = effect_model(e.effect).explain(e, h, pr);
+  if (e.place == Place::kInLoop)
+    s += fmt::format(
+        ", not on the bias itself but inside the governor's loop, after a lag of {:.0f} ms "
+        "(the actuator or the rack; the values are the bias-% equivalents there)",
+        1e3 * e.place_params.at(0));
+  if (e.place == Place::kOutput)
+    s += fmt::format(
+        ", not on the bias but on the measured output (the values are bias-% equivalents; "
+        "times the static gain {:.4g} they are output units)",
+        pr.scales.dc_gain);
+  return s;
 }
 
 // An operating-point step found in the recording (find_level_shift).

@@ -27,18 +27,20 @@ double to_internal(const ParamSpec& s, double p) {
   return std::log(t / (1.0 - t));
 }
 
+// The searched vector: each effect's parameters, then its place's.
 struct Layout {
-  std::vector<Effect> effects;
-  std::vector<std::vector<ParamSpec>> specs;
+  std::vector<AppliedEffect> shapes;  // effect and place; parameters unused
+  std::vector<std::vector<ParamSpec>> specs, place_specs;
   int size = 0;
 };
 
 std::vector<AppliedEffect> unpack(const Layout& l, const Eigen::VectorXd& x) {
   std::vector<AppliedEffect> out;
   int k = 0;
-  for (std::size_t i = 0; i < l.effects.size(); ++i) {
-    AppliedEffect e{l.effects[i], {}};
+  for (std::size_t i = 0; i < l.shapes.size(); ++i) {
+    AppliedEffect e{l.shapes[i].effect, {}, l.shapes[i].place, {}};
     for (const auto& s : l.specs[i]) e.params.push_back(to_physical(s, x(k++)));
+    for (const auto& s : l.place_specs[i]) e.place_params.push_back(to_physical(s, x(k++)));
     out.push_back(std::move(e));
   }
   return out;
@@ -87,7 +89,7 @@ std::string HypothesisFit::name() const {
 int HypothesisFit::parameter_count() const {
   int n = 0;
   for (const auto& e : effects) {
-    n += static_cast<int>(e.params.size());
+    n += static_cast<int>(e.params.size() + e.place_params.size());
     n += effect_model(e.effect).regressor_columns;  // e.g. amplitude and phase by LS
   }
   return n;
@@ -98,9 +100,10 @@ HypothesisFit fit_hypothesis(const Problem& pr,
                              const Eigen::VectorXd& baseline_yhat, const FitOptions& options) {
   Layout layout;
   for (const auto& e : starts.front()) {
-    layout.effects.push_back(e.effect);
+    layout.shapes.push_back(e);
     layout.specs.push_back(parameter_specs(e.effect, pr.scales));
-    layout.size += static_cast<int>(layout.specs.back().size());
+    layout.place_specs.push_back(place_specs(e.place, pr.scales));
+    layout.size += static_cast<int>(layout.specs.back().size() + layout.place_specs.back().size());
   }
   int calls = 0;
   Residual fn{&pr, &layout, {}, &calls};
@@ -111,9 +114,12 @@ HypothesisFit fit_hypothesis(const Problem& pr,
   for (const auto& start : starts) {
     Eigen::VectorXd x(layout.size);
     int k = 0;
-    for (std::size_t i = 0; i < start.size(); ++i)
+    for (std::size_t i = 0; i < start.size(); ++i) {
       for (std::size_t j = 0; j < start[i].params.size(); ++j)
         x(k++) = to_internal(layout.specs[i][j], start[i].params[j]);
+      for (std::size_t j = 0; j < start[i].place_params.size(); ++j)
+        x(k++) = to_internal(layout.place_specs[i][j], start[i].place_params[j]);
+    }
     Eigen::NumericalDiff<Residual> diff(fn);
     Eigen::LevenbergMarquardt<Eigen::NumericalDiff<Residual>> lm(diff);
     lm.parameters.maxfev = options.max_evaluations;

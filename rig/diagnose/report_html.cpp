@@ -155,6 +155,18 @@ void bode_section(report::HtmlReport& page, const DiagnoseResult& r) {
   page.section("Frequency response").chart(mag).chart(phase);
 }
 
+// "rate_limit (in the loop)+drift": the effects with the places of those not at the input.
+std::string placed_name(const HypothesisFit& h) {
+  std::string s;
+  for (const auto& e : h.effects) {
+    if (!s.empty()) s.push_back('+');
+    s += to_string(e.effect);
+    if (e.place == Place::kInLoop) s += " (in the loop)";
+    if (e.place == Place::kOutput) s += " (at the output)";
+  }
+  return s;
+}
+
 report::Table hypotheses_table(const DiagnoseResult& r) {
   report::Table t{{"rank", "effect", "parameters", "fit before (%)", "fit after (%)",
                    "validation before (%)", "validation after (%)", "score"},
@@ -168,9 +180,12 @@ report::Table hypotheses_table(const DiagnoseResult& r) {
       for (std::size_t j = 0; j < e.params.size(); ++j)
         params +=
             fmt::format("{}{}={:.4g}", params.empty() ? "" : ", ", specs[j].name, e.params[j]);
+      const auto place = place_specs(e.place, r.problem.scales);
+      for (std::size_t j = 0; j < e.place_params.size(); ++j)
+        params += fmt::format(", {}={:.4g}", place[j].name, e.place_params[j]);
     }
     t.rows.push_back(
-        {std::to_string(i + 1), h.name(), params, fmt::format("{:.1f}", h.fit_before),
+        {std::to_string(i + 1), placed_name(h), params, fmt::format("{:.1f}", h.fit_before),
          fmt::format("{:.1f}", h.fit_after), fmt::format("{:.1f}", h.validation_fit_before),
          fmt::format("{:.1f}", h.validation_fit_after), fmt::format("{:+.2f}", h.score)});
   }

@@ -19,7 +19,13 @@ json hypothesis_json(const HypothesisFit& h, const Problem& pr) {
       params[h.effects.size() > 1 ? std::string(to_string(e.effect)) + "." + specs[i].name
                                   : specs[i].name] = number_or_null(e.params[i]);
     }
-    effects.push_back({{"effect", to_string(e.effect)}, {"params", p}});
+    const auto place = place_specs(e.place, pr.scales);
+    for (std::size_t i = 0; i < e.place_params.size(); ++i) {
+      p[place[i].name] = number_or_null(e.place_params[i]);
+      params[h.effects.size() > 1 ? std::string(to_string(e.effect)) + "." + place[i].name
+                                  : place[i].name] = number_or_null(e.place_params[i]);
+    }
+    effects.push_back({{"effect", to_string(e.effect)}, {"place", to_string(e.place)}, {"params", p}});
   }
   json derived = json::object();
   for (const auto& [k, v] : h.derived) derived[k] = number_or_null(v);
@@ -61,6 +67,7 @@ json location_json(const DiagnoseResult& r) {
   json band = loc.freq.band_hz ? json::array({loc.freq.band_hz->first, loc.freq.band_hz->second})
                                : json(nullptr);
   return {{"band_hz", band},
+          {"timing_nuisance_s", r.timing_nuisance_s},
           {"time_windows", windows},
           {"level_shift", r.level_shift_time_s ? nlohmann::json{{"time_s", *r.level_shift_time_s},
                                                                 {"size", r.level_shift}}
@@ -133,8 +140,16 @@ model::ModelFile augmented_model(const DiagnoseResult& r, const model::ModelFile
       const auto specs = parameter_specs(e.effect, r.problem.scales);
       json p = json::object();
       for (std::size_t i = 0; i < e.params.size(); ++i) p[specs[i].name] = e.params[i];
+      const auto place = place_specs(e.place, r.problem.scales);
+      for (std::size_t i = 0; i < e.place_params.size(); ++i)
+        p[place[i].name] = e.place_params[i];
       const char* where = kind_of(e.effect) == EffectKind::kInputNonlinearity
-                              ? "input, before the tf"
+                              ? (e.place == Place::kInLoop
+                                     ? "in the loop: after 1/(1 + s front_lag_s), before the "
+                                       "tf times (1 + s front_lag_s)"
+                                 : e.place == Place::kOutput
+                                     ? "output: on the tf's output over its static gain"
+                                     : "input, before the tf")
                           : kind_of(e.effect) == EffectKind::kFeedback
                               ? "output feedback around the tf's rational part"
                           : kind_of(e.effect) == EffectKind::kDisturbance ? "added to the output"
@@ -146,6 +161,8 @@ model::ModelFile augmented_model(const DiagnoseResult& r, const model::ModelFile
     m.extra["augmentation_derived"] = derived;
   }
   m.extra["augmentation"] = aug;
+  // The sampling convention's shift of the dead time, within +-dt/2 (not an effect).
+  m.extra["timing_nuisance_s"] = r.timing_nuisance_s;
   m.extra["baseline"] = {{"num", report::to_json_array(baseline.tf.num)},
                          {"den", report::to_json_array(baseline.tf.den)},
                          {"delay_s", baseline.tf.delay_s}};

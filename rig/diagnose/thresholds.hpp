@@ -21,6 +21,10 @@ inline constexpr double kPenaltyPctPerParameter = 0.25;
 inline constexpr std::size_t kPairedInputSingles = 3;
 // Of those, the best this many are also paired with each detected disturbance.
 inline constexpr std::size_t kPairedWithDisturbance = 2;
+// A disturbance whose single scores this much dominates the residual: the input-side
+// singles, fitted without it, are ranked by noise then, so every input-side effect is paired
+// with it (the drift materiality gain below: the same "clearly more than noise").
+inline constexpr double kDominantDisturbanceGainPct = 3.0;
 
 // --- Drift materiality (diagnose.cpp) ---
 // A drift alone is material when its rms is at least this fraction of the input-driven
@@ -75,5 +79,15 @@ inline constexpr int kOnsetHypotheses = 3;
 inline constexpr double kLevelShiftSpreads = 10.0;
 // ... and this fraction of the model output's std: large against the input-driven response.
 inline constexpr double kLevelShiftOfOutputStd = 0.5;
+
+// --- Where an input-side nonlinearity sits (placement.cpp) ---
+// The in-loop place's front lag T_f (the path from the bias to the nonlinearity: a
+// governor's output filter and actuator servo, 20 ms to a few hundred ms) is searched
+// between these: below 5 ms it is the input place, above 2 s the nonlinearity would act on
+// a signal the excitation hardly moves.
+inline constexpr double kFrontLagMinS = 0.005;
+inline constexpr double kFrontLagMaxS = 2.0;
+// Its starting points: an actuator (50 ms) and a governor's filtered output (300 ms).
+inline constexpr double kFrontLagSeedsS[] = {0.05, 0.3};
 
 }  // namespace rig::diagnose::thresholds

@@ -78,15 +78,29 @@ def param_errors(case, report):
     return out
 
 
-def run_case(spec, rig, work):
+def simulated_case(spec, d, reuse):
+    """The case's recording in d and its oracle verdict: simulated, or with reuse read back
+    from an earlier run's d (the same case list: same --seed)."""
+    cached = os.path.join(d, "oracle.json")
+    if reuse and os.path.exists(cached):
+        truth = json.load(open(os.path.join(d, "truth.json")))
+        if truth.get("seed") == spec["seed"] and truth.get("effect") == spec["effect"]:
+            return dict(truths=truth["truths"]), json.load(open(cached)), 0.0
     case = cs.make_case(spec["id"], spec["effect"], spec["size"], spec["concealment"], spec["seed"])
     p, p_after, _ = oracle.plan(case)
     t0 = time.time()
     sim = g.simulate(case["u"], p, seed=case["seed"], onset_s=case["onset_s"], p_after=p_after)
     orc = oracle.judge(case, sim["y"])
     sim_s = time.time() - t0
-    d = os.path.join(work, spec["id"])
     cs.write_case(case, sim["y"][:, 0], d)
+    with open(cached, "w") as f:
+        json.dump(orc, f, default=float)
+    return case, orc, sim_s
+
+
+def run_case(spec, rig, work, reuse=False):
+    d = os.path.join(work, spec["id"])
+    case, orc, sim_s = simulated_case(spec, d, reuse)
     t0 = time.time()
     proc = subprocess.run(["nice", "-n", "10", rig, "diagnose", "--recording",
                            os.path.join(d, "recording.csv"), "--model",
@@ -205,6 +219,9 @@ def main():
     ap.add_argument("--plant-bench", help="bench_diagnose_plant executable (plantsim side)")
     ap.add_argument("--plant-seeds", type=int, default=2)
     ap.add_argument("--plant-output", help="a saved bench_diagnose_plant output to tabulate")
+    ap.add_argument("--reuse", action="store_true",
+                    help="reuse the recordings and oracle verdicts an earlier run left in --out "
+                         "(same --seed): only `rig diagnose` runs")
     ap.add_argument("--rescore", help="tabulate an earlier results.json again, run nothing")
     a = ap.parse_args()
     if a.rescore:
@@ -224,7 +241,7 @@ def main():
     t_start = time.time()
     rows = []
     for spec in specs:
-        r = run_case(spec, a.rig, a.out)
+        r = run_case(spec, a.rig, a.out, a.reuse)
         o = r["oracle"]
         errs = " ".join(f"{k} {v:+.1f}%" for k, v in r.get("param_err_pct", {}).items())
         vb, va = r.get("vfit_before"), r.get("vfit_after")

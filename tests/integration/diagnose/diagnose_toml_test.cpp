@@ -251,7 +251,7 @@ TEST(DiagnosePlantMapping, LinearEffectsDisturbancesAndPairs) {
   const auto ac = map({{E::kAcCoupling, {2e4}}});
   EXPECT_EQ(changed(ac, "meas.ac_rc_s"), 1e4);
   EXPECT_EQ(ac.notes.size(), 1u);
-  const auto res = map({{E::kResonance, {3.0, 0.1, 2.0}}});
+  const auto res = map({{E::kResonance, {3.0, 0.1, 2.0, 1.0}}});
   EXPECT_TRUE(res.changes.empty());
   EXPECT_EQ(res.notes.size(), 1u);
 }

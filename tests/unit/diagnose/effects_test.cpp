@@ -60,8 +60,8 @@ TEST(Effects, LagIsThreeDecibelsDownAtItsCorner) {
 }
 
 TEST(Effects, ResonancePeaksByItsRatioAndIsFlatAway) {
-  EXPECT_NEAR(std::abs(ratio(Effect::kResonance, {3.0, 0.05, 2.5}, 3.0)), 2.5, 1e-9);
-  EXPECT_NEAR(std::abs(ratio(Effect::kResonance, {3.0, 0.05, 2.5}, 0.05)), 1.0, 1e-3);
+  EXPECT_NEAR(std::abs(ratio(Effect::kResonance, {3.0, 0.05, 2.5, 1.0}, 3.0)), 2.5, 1e-9);
+  EXPECT_NEAR(std::abs(ratio(Effect::kResonance, {3.0, 0.05, 2.5, 1.0}, 0.05)), 1.0, 1e-3);
 }
 
 TEST(Effects, AcCouplingIsAHighPass) {

@@ -1,0 +1,76 @@
+#include "rig/diagnose/placement.hpp"
+
+#include <cmath>
+
+#include "rig/diagnose/augmented_model.hpp"
+#include "rig/diagnose/blocks.hpp"
+#include "rig/diagnose/diagnose.hpp"
+#include "rig/diagnose/thresholds.hpp"
+
+namespace rig::diagnose {
+
+const char* to_string(Place place) {
+  switch (place) {
+    case Place::kInput:
+      return "input";
+    case Place::kInLoop:
+      return "in_loop";
+    case Place::kOutput:
+      return "output";
+  }
+  return "?";
+}
+
+std::vector<ParamSpec> place_specs(Place place, const DataScales& s) {
+  if (place != Place::kInLoop) return {};
+  return {{"front_lag_s", std::max(s.dt_s, thresholds::kFrontLagMinS), thresholds::kFrontLagMaxS,
+           true}};
+}
+
+bool in_loop_possible(const model::TransferFunction& tf) {
+  return tf.numerator_order() < tf.order();
+}
+
+Eigen::VectorXd front_signal(const Eigen::VectorXd& v, double front_lag_s, double dt_s) {
+  model::TransferFunction lag;
+  lag.num = Eigen::VectorXd::Ones(1);
+  lag.den = Eigen::Vector2d(front_lag_s, 1.0);
+  return model::simulate(lag, v, dt_s);
+}
+
+model::TransferFunction rest_after_front(const model::TransferFunction& tf, double front_lag_s) {
+  model::TransferFunction out = tf;
+  out.num = poly_multiply(tf.num, Eigen::Vector2d(front_lag_s, 1.0));
+  return out;
+}
+
+Problem problem_at(const Problem& pr, Place place, double front_lag_s) {
+  Problem at = pr;
+  if (place == Place::kInLoop) {
+    at.u = front_signal(pr.u, front_lag_s, pr.dt_s);
+  } else if (place == Place::kOutput) {
+    at.u = pr.baseline_z / pr.scales.dc_gain;
+  } else {
+    return at;
+  }
+  finish_problem(at);
+  return at;
+}
+
+std::vector<std::vector<AppliedEffect>> placed_starts(Effect effect, Place place,
+                                                      const Problem& pr, const Location& loc) {
+  std::vector<std::vector<AppliedEffect>> out;
+  if (place != Place::kInLoop) {
+    const Problem at = problem_at(pr, place, 0.0);
+    for (auto& p : seeds_for(effect, at, loc)) out.push_back({AppliedEffect{effect, p, place, {}}});
+    return out;
+  }
+  for (const double lag_s : thresholds::kFrontLagSeedsS) {
+    const Problem at = problem_at(pr, place, lag_s);
+    for (auto& p : seeds_for(effect, at, loc))
+      out.push_back({AppliedEffect{effect, p, place, {lag_s}}});
+  }
+  return out;
+}
+
+}  // namespace rig::diagnose

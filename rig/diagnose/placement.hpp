@@ -1,0 +1,46 @@
+// Where an input-side nonlinearity sits (docs/diagnose.md, "Where it sits"). Knowing only the
+// baseline transfer function G (bias -> output), the rig tries each one at three places:
+//   input    u -> N -> G                              (on the bias itself)
+//   in_loop  u -> F -> N -> G / F,  F = 1/(1 + s T_f) (after the governor's lag: the
+//            actuator or the rack; T_f, front_lag_s, is fitted; a Wiener-Hammerstein
+//            structure whose linear part is G for any T_f)
+//   output   u -> G -> G0 N(. / G0)                   (on the measured output)
+// At each place the nonlinearity acts on a signal with the bias's static scale (F(0) = 1 and
+// the output divided by the static gain G0), so its parameter is the bias-% equivalent of
+// the value at that place.
+#pragma once
+
+#include <Eigen/Core>
+#include <span>
+#include <vector>
+
+#include "rig/diagnose/effects.hpp"
+#include "rig/model/transfer_function.hpp"
+
+namespace rig::diagnose {
+
+struct Problem;
+struct Location;
+
+inline constexpr std::array<Place, 3> kAllPlaces = {Place::kInput, Place::kInLoop,
+                                                    Place::kOutput};
+
+// Whether the baseline allows the in-loop place (G / F proper: G strictly proper).
+bool in_loop_possible(const model::TransferFunction& tf);
+
+// F's output for the in-loop place (the signal the nonlinearity sees).
+Eigen::VectorXd front_signal(const Eigen::VectorXd& v, double front_lag_s, double dt_s);
+// G / F: the baseline's linear part after the nonlinearity.
+model::TransferFunction rest_after_front(const model::TransferFunction& tf, double front_lag_s);
+
+// The problem as seen at a place: u replaced by the linear signal there (for an effect's
+// seeds, which come from the input's scales).
+Problem problem_at(const Problem& problem, Place place, double front_lag_s);
+
+// Starting points of one effect at one place (the effect's seeds at that place's scales,
+// for a few front lags in the loop).
+std::vector<std::vector<AppliedEffect>> placed_starts(Effect effect, Place place,
+                                                      const Problem& problem,
+                                                      const Location& location);
+
+}  // namespace rig::diagnose
