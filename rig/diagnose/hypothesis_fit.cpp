@@ -109,10 +109,10 @@ HypothesisFit fit_hypothesis(const Problem& pr,
   Residual fn{&pr, &layout, {}, &calls};
   for (Eigen::Index k = 0; k < pr.y.size(); ++k)
     if (pr.est_weight(k) > 0.0) fn.rows.push_back(k);
-  double best_cost = std::numeric_limits<double>::infinity();
-  Eigen::VectorXd best_x;
+  // Every starting point is evaluated once; only the best few are searched from.
+  std::vector<std::pair<double, Eigen::VectorXd>> points;
   for (const auto& start : starts) {
-    Eigen::VectorXd x(layout.size);
+    Eigen::VectorXd x(layout.size), f;
     int k = 0;
     for (std::size_t i = 0; i < start.size(); ++i) {
       for (std::size_t j = 0; j < start[i].params.size(); ++j)
@@ -120,6 +120,16 @@ HypothesisFit fit_hypothesis(const Problem& pr,
       for (std::size_t j = 0; j < start[i].place_params.size(); ++j)
         x(k++) = to_internal(layout.place_specs[i][j], start[i].place_params[j]);
     }
+    fn(x, f);
+    points.emplace_back(f.squaredNorm(), std::move(x));
+  }
+  std::stable_sort(points.begin(), points.end(),
+                   [](const auto& a, const auto& b) { return a.first < b.first; });
+  if (points.size() > options.searched_starts) points.resize(options.searched_starts);
+  double best_cost = std::numeric_limits<double>::infinity();
+  Eigen::VectorXd best_x;
+  for (auto& point : points) {
+    Eigen::VectorXd& x = point.second;
     Eigen::NumericalDiff<Residual> diff(fn);
     Eigen::LevenbergMarquardt<Eigen::NumericalDiff<Residual>> lm(diff);
     lm.parameters.maxfev = options.max_evaluations;

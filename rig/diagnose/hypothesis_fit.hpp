@@ -38,6 +38,10 @@ struct HypothesisFit {
 struct FitOptions {
   double penalty_pct_per_parameter = thresholds::kPenaltyPctPerParameter;
   int max_evaluations = 120;  // model simulations per start
+  // The starting points with the lowest cost searched from (each is evaluated once first):
+  // the others start where the cost is already higher, and each search costs up to
+  // max_evaluations simulations of the whole record.
+  std::size_t searched_starts = 2;
 };
 
 // `starts`: initial parameter sets of the same effects (at least one).
