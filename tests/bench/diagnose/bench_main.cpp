@@ -10,8 +10,8 @@
 #include <string>
 #include <vector>
 
+#include "concealed.hpp"
 #include "recording_out.hpp"
-#include "rig/diagnose/concealed.hpp"
 
 using namespace rig::diagnose;
 

@@ -7,8 +7,8 @@
 #include <filesystem>
 #include <string>
 
+#include "concealed.hpp"
 #include "recording_out.hpp"
-#include "rig/diagnose/concealed.hpp"
 
 using namespace rig::diagnose;
 using rig::diagnose::bench::write_diagnose_recording;

@@ -9,9 +9,9 @@
 #include <string>
 #include <vector>
 
+#include "concealed.hpp"
 #include "rig/cli/commands.hpp"
 #include "rig/cli/diagnose.hpp"
-#include "rig/diagnose/concealed.hpp"
 #include "rig/model/model_file.hpp"
 
 namespace fs = std::filesystem;

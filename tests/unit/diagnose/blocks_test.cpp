@@ -4,7 +4,7 @@
 
 #include <cmath>
 
-#include "rig/diagnose/concealed.hpp"
+#include "concealed.hpp"
 #include "rig/signal/excitation.hpp"
 
 namespace rig::diagnose {

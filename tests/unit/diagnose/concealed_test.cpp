@@ -1,6 +1,6 @@
 // Acceptance on concealed recordings (seeded; the seed of every case is printed): a smaller
 // set than bench_diagnose, with its acceptance figures.
-#include "rig/diagnose/concealed.hpp"
+#include "concealed.hpp"
 
 #include <gtest/gtest.h>
 

@@ -3,7 +3,7 @@
 #include <cmath>
 #include <limits>
 
-#include "rig/diagnose/concealed.hpp"
+#include "concealed.hpp"
 
 namespace rig::diagnose {
 namespace {

@@ -3,8 +3,8 @@
 #include <cmath>
 #include <numbers>
 
+#include "concealed.hpp"
 #include "rig/diagnose/augmented_model.hpp"
-#include "rig/diagnose/concealed.hpp"
 #include "rig/diagnose/effect_registry.hpp"
 
 namespace rig::diagnose {

@@ -1,6 +1,6 @@
 #include <gtest/gtest.h>
 
-#include "rig/diagnose/concealed.hpp"
+#include "concealed.hpp"
 #include "rig/diagnose/split.hpp"
 
 namespace rig::diagnose {

@@ -3,7 +3,7 @@
 #include <filesystem>
 #include <fstream>
 
-#include "rig/diagnose/concealed.hpp"
+#include "concealed.hpp"
 #include "rig/diagnose/report_out.hpp"
 #include "rig/model/model_file.hpp"
 

@@ -1,7 +1,7 @@
 // Recordings with one effect present that the nominal model lacks, concealed: small against
 // the noise at a +-3 % power excitation, masked by drift or by a declared AC coupling, or
 // present in part of the record only. The proof data of `rig diagnose` (tests, benchmark,
-// the `conceal` example program).
+// the `diagnose_conceal` example program): test data, kept out of the product library.
 //
 // The "true" plant is simulated five times finer than the recording (input interpolated
 // linearly, output decimated), so the diagnosis never sees its own discretisation.
