@@ -141,7 +141,9 @@ Eigen::VectorXd linear_output(const Problem& pr, std::span<const AppliedEffect> 
   model::TransferFunction g = tf;
   if (loop) {
     const double lag_s = loop->place_params.at(0);
-    v = apply_input(pr, *loop, front_signal(v, lag_s, pr.dt_s));
+    const Eigen::VectorXd w = front_signal(v, lag_s, pr.dt_s);
+    const double k = in_loop_scale(pr, w);
+    v = apply_input(pr, *loop, k * w) / k;
     g = rest_after_front(tf, lag_s);
   }
   return feedback ? simulate_with_feedback(g, v, pr.dt_s, feedback_of(pr, effects))

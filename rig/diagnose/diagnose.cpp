@@ -5,9 +5,11 @@
 #include <chrono>
 #include <cmath>
 #include <functional>
+#include <optional>
 #include <stdexcept>
 #include <thread>
 
+#include "rig/diagnose/effect_registry.hpp"
 #include "rig/diagnose/placement.hpp"
 #include "rig/diagnose/split.hpp"
 #include "rig/diagnose/timing.hpp"
@@ -22,6 +24,8 @@ using thresholds::kOperatingLevelStds;
 using thresholds::kPairedInputSingles;
 using thresholds::kPairedWithDisturbance;
 using thresholds::kDominantDisturbanceGainPct;
+using thresholds::kNonlinearOverLinearPct;
+using thresholds::kNestedMarginPct;
 
 using Candidate = std::vector<std::vector<AppliedEffect>>;  // starting points of one hypothesis
 
@@ -54,6 +58,12 @@ std::vector<HypothesisFit> fit_all(const Problem& pr, const std::vector<Candidat
 bool has_input_side(const HypothesisFit& h) {
   return std::any_of(h.effects.begin(), h.effects.end(), [](const AppliedEffect& e) {
     return kind_of(e.effect) != EffectKind::kDisturbance;
+  });
+}
+
+bool has_nonlinearity(const HypothesisFit& h) {
+  return std::any_of(h.effects.begin(), h.effects.end(), [](const AppliedEffect& e) {
+    return kind_of(e.effect) == EffectKind::kInputNonlinearity;
   });
 }
 
@@ -146,12 +156,13 @@ bool sampling_convention_only(const HypothesisFit& h, const Problem& pr) {
 // The best hypothesis above min_gain; when the input tests failed, one with an input-side
 // effect that adds min_gain to what its disturbance alone explains, unless there is none
 // (then a disturbance alone explains it).
-int choose_raw(const DiagnoseResult& r, double min_gain) {
+int choose_raw(const DiagnoseResult& r, double min_gain, bool linear_only = false) {
   const bool input = r.location.input_mismatch;
   int best_any = -1;
   for (std::size_t i = 0; i < r.hypotheses.size(); ++i) {
     const auto& h = r.hypotheses[i];
     if (h.score < min_gain) break;
+    if (linear_only && has_nonlinearity(h)) continue;
     if (immaterial_drift(h, r.problem) || sampling_convention_only(h, r.problem)) continue;
     if (best_any < 0) best_any = static_cast<int>(i);
     if (!input) return static_cast<int>(i);
@@ -165,8 +176,27 @@ int choose_raw(const DiagnoseResult& r, double min_gain) {
 // when that single scores min_gain too: the augmented model should not carry the set's
 // normal wander as a change.
 int choose(const DiagnoseResult& r, double min_gain) {
-  const int i = choose_raw(r, min_gain);
+  int i = choose_raw(r, min_gain);
   if (i < 0) return i;
+  // An effect that contains a simpler one must beat it by a margin (thresholds.hpp).
+  if (const auto& h = r.hypotheses[static_cast<std::size_t>(i)]; h.effects.size() == 1) {
+    if (const auto simpler = effect_model(h.effects[0].effect).generalises) {
+      for (std::size_t j = 0; j < r.hypotheses.size(); ++j) {
+        const auto& g = r.hypotheses[j];
+        if (g.effects.size() == 1 && g.effects[0].effect == *simpler) {
+          if (g.score >= h.score - kNestedMarginPct) i = static_cast<int>(j);
+          break;  // ranked: the simpler effect's best place
+        }
+      }
+    }
+  }
+  // A nonlinearity must beat the best linear explanation by a margin (thresholds.hpp).
+  if (has_nonlinearity(r.hypotheses[static_cast<std::size_t>(i)])) {
+    const int j = choose_raw(r, min_gain, true);
+    if (j >= 0 && r.hypotheses[static_cast<std::size_t>(j)].score >=
+                      r.hypotheses[static_cast<std::size_t>(i)].score - kNonlinearOverLinearPct)
+      i = j;
+  }
   const auto& h = r.hypotheses[static_cast<std::size_t>(i)];
   if (h.effects.size() != 2 || h.effects[1].effect != Effect::kDrift) return i;
   bool drift_immaterial = false;
@@ -194,11 +224,20 @@ std::string verdict_of(const HypothesisFit& h) {
 ModelOutput locate_baseline(Problem& pr, DiagnoseResult& r) {
   pr.level_shift_at = find_level_shift(pr, pr.y - model_output(pr, {}).yhat);
   ModelOutput base = model_output(pr, {});
+  std::optional<double> step;
   for (const auto& [name, value] : base.derived)
-    if (name == "level_shift") {
-      r.level_shift_time_s = static_cast<double>(pr.level_shift_at) * pr.dt_s;
-      r.level_shift = value;
-    }
+    if (name == "level_shift") step = value;
+  if (step) {
+    r.level_shift_time_s = static_cast<double>(pr.level_shift_at) * pr.dt_s;
+    r.level_shift = *step;
+    // The step is taken out of the recording, so that every fit measures the dynamics: a
+    // gain change with the level in it steps the level by (g - 1) x level, which would
+    // otherwise dominate the variance every fit percentage is taken of.
+    const Eigen::Index n = pr.y.size();
+    pr.y.tail(n - pr.level_shift_at).array() -= *step;
+    pr.level_shift_at = -1;
+    base = model_output(pr, {});
+  }
   r.baseline_yhat = base.yhat;
   const Eigen::ArrayXd used = pr.est_weight + pr.val_weight;
   r.fit_before_pct = weighted_fit_pct(pr.y, base.yhat, used);

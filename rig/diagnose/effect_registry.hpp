@@ -7,6 +7,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <optional>
 #include <span>
 #include <string>
 #include <string_view>
@@ -84,6 +85,9 @@ struct EffectModel {
                          const Problem& problem) = nullptr;
   // The plant parameters that express it; nullptr: none does.
   void (*map_to_plant)(const PlantContext& context, PlantTarget& plant) = nullptr;
+  // The simpler effect this one contains as a special case (hysteresis: backlash), if any:
+  // the verdict names the simpler one unless this scores clearly more (diagnose.cpp).
+  std::optional<Effect> generalises;
 };
 
 // Throws std::out_of_range for a value outside the enum.

@@ -76,10 +76,19 @@ std::string what_effect_means(const AppliedEffect& e, const HypothesisFit& h, co
 // An operating-point step found in the recording (find_level_shift).
 std::string level_shift_words(const DiagnoseResult& r) {
   if (!r.level_shift_time_s) return "";
+  // The level before the step (y_level is the mean over the whole record).
+  const double after = 1.0 - *r.level_shift_time_s / r.problem.scales.duration_s;
+  const double level = r.problem.y_level - r.level_shift * after;
+  const std::string of_level =
+      std::abs(level) > 0.0
+          ? fmt::format(" ({:+.1f} % of the operating level before it, {:.4g}: a gain change of x{:.3f} "
+                        "with the level in it steps it by as much)",
+                        100.0 * r.level_shift / level, level, 1.0 + r.level_shift / level)
+          : "";
   return fmt::format(
-      "The recorded level steps by {:+.4g} at {:.1f} s (an operating-point change, or a gain "
-      "that changed with the operating point in it); every model is given that step. ",
-      r.level_shift, *r.level_shift_time_s);
+      "The recorded level steps by {:+.4g} at {:.1f} s{} (an operating-point change, or a gain "
+      "that changed with the operating point in it); the step is taken out before the fits. ",
+      r.level_shift, *r.level_shift_time_s, of_level);
 }
 
 // A disturbance the location found that no hypothesis makes worth its parameters.

@@ -38,6 +38,11 @@ Eigen::VectorXd front_signal(const Eigen::VectorXd& v, double front_lag_s, doubl
   return model::simulate(lag, v, dt_s);
 }
 
+double in_loop_scale(const Problem& pr, const Eigen::VectorXd& w) {
+  const double sw = std::sqrt((w.array() - w.mean()).square().mean());
+  return sw > 0.0 ? pr.scales.u_std / sw : 1.0;
+}
+
 model::TransferFunction rest_after_front(const model::TransferFunction& tf, double front_lag_s) {
   model::TransferFunction out = tf;
   out.num = poly_multiply(tf.num, Eigen::Vector2d(front_lag_s, 1.0));
@@ -47,7 +52,8 @@ model::TransferFunction rest_after_front(const model::TransferFunction& tf, doub
 Problem problem_at(const Problem& pr, Place place, double front_lag_s) {
   Problem at = pr;
   if (place == Place::kInLoop) {
-    at.u = front_signal(pr.u, front_lag_s, pr.dt_s);
+    const Eigen::VectorXd w = front_signal(pr.u, front_lag_s, pr.dt_s);
+    at.u = in_loop_scale(pr, w) * w;
   } else if (place == Place::kOutput) {
     at.u = pr.baseline_z / pr.scales.dc_gain;
   } else {

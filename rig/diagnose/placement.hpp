@@ -1,13 +1,14 @@
 // Where an input-side nonlinearity sits (docs/diagnose.md, "Where it sits"). Knowing only the
 // baseline transfer function G (bias -> output), the rig tries each one at three places:
 //   input    u -> N -> G                              (on the bias itself)
-//   in_loop  u -> F -> N -> G / F,  F = 1/(1 + s T_f) (after the governor's lag: the
-//            actuator or the rack; T_f, front_lag_s, is fitted; a Wiener-Hammerstein
-//            structure whose linear part is G for any T_f)
+//   in_loop  u -> F -> k -> N -> 1/k -> G / F,  F = 1/(1 + s T_f) (after the governor's
+//            lag: the actuator or the rack; T_f, front_lag_s, is fitted; a
+//            Wiener-Hammerstein structure whose linear part is G for any T_f)
 //   output   u -> G -> G0 N(. / G0)                   (on the measured output)
-// At each place the nonlinearity acts on a signal with the bias's static scale (F(0) = 1 and
-// the output divided by the static gain G0), so its parameter is the bias-% equivalent of
-// the value at that place.
+// At each place the nonlinearity acts on a signal on the bias's scale: in the loop F u times
+// k = std(u) / std(F u) (the signal there, as many bias-% as it has the bias's rms: how a
+// rack's travel per % of bias is measured), at the output the output over the static gain
+// G0. Its parameter is the bias-% equivalent of the value at that place.
 #pragma once
 
 #include <Eigen/Core>
@@ -30,6 +31,8 @@ bool in_loop_possible(const model::TransferFunction& tf);
 
 // F's output for the in-loop place (the signal the nonlinearity sees).
 Eigen::VectorXd front_signal(const Eigen::VectorXd& v, double front_lag_s, double dt_s);
+// k: the in-loop signal w = F u in the bias's rms.
+double in_loop_scale(const Problem& problem, const Eigen::VectorXd& w);
 // G / F: the baseline's linear part after the nonlinearity.
 model::TransferFunction rest_after_front(const model::TransferFunction& tf, double front_lag_s);
 

@@ -16,6 +16,19 @@ inline constexpr double kMinGainPct = 0.2;
 // FitOptions::penalty_pct_per_parameter).
 inline constexpr double kPenaltyPctPerParameter = 0.25;
 
+// An input-side nonlinearity is the verdict only when it scores this much more than the
+// best hypothesis without one: at one amplitude a play, a limit or a hysteresis inside the
+// loop acts as a lag (its describing function), and with a fitted place they can shape the
+// band as freely as a linear effect with one parameter more; 1.5 points is six parameters'
+// penalty, more than any placed nonlinearity carries.
+inline constexpr double kNonlinearOverLinearPct = 1.5;
+
+// An effect that contains a simpler one as a special case (EffectModel::generalises:
+// hysteresis, a play at shape_ratio 1) is named only when it scores this much more than the
+// simpler one: four parameters' penalty, so that its extra shape parameter has bought more
+// than the fitting noise of two placed nonlinearities.
+inline constexpr double kNestedMarginPct = 1.0;
+
 // --- Pairs (diagnose.cpp) ---
 // Only the best input-side singles are paired with each other (every pair is a full fit).
 inline constexpr std::size_t kPairedInputSingles = 3;

@@ -52,6 +52,7 @@ const EffectModel kHysteresisEffect{
     .seeds = seeds,
     .apply_input = apply,
     .explain = meaning,
+    .generalises = Effect::kBacklash,  // shape_ratio 1: a play
 };
 
 }  // namespace rig::diagnose
