@@ -2,12 +2,14 @@
 
 #include <Eigen/Dense>
 #include <cmath>
+#include <limits>
 #include <numbers>
 #include <stdexcept>
 
 #include "rig/diagnose/blocks.hpp"
 #include "rig/diagnose/effect_registry.hpp"
 #include "rig/diagnose/placement.hpp"
+#include "rig/diagnose/thresholds.hpp"
 #include "rig/signal/ac_coupling.hpp"
 
 namespace rig::diagnose {
@@ -150,6 +152,27 @@ Eigen::VectorXd linear_output(const Problem& pr, std::span<const AppliedEffect> 
                   : model::simulate(g, v, pr.dt_s);
 }
 
+// The feedback-placed nonlinearity (placement.hpp): v - c (y' - N(y')), y' = z / G0, solved
+// by fixed-point iteration over the whole record (thresholds.hpp); NaN when it does not
+// settle (the fit then rejects the point).
+Eigen::VectorXd close_feedback(const Problem& pr, std::span<const AppliedEffect> effects,
+                               const model::TransferFunction& tf, const AppliedEffect* loop,
+                               const AppliedEffect& fb, const Eigen::VectorXd& v, bool feedback,
+                               Eigen::VectorXd z) {
+  const double g0 = pr.scales.dc_gain, c = fb.place_params.at(0);
+  for (int pass = 0; pass < thresholds::kFeedbackPasses; ++pass) {
+    const Eigen::VectorXd yp = z / g0;
+    const Eigen::VectorXd f = c * (yp - apply_input(pr, fb, yp));
+    const Eigen::VectorXd next = linear_output(pr, effects, tf, loop, v - f, feedback);
+    const double change = (next - z).norm(), size = std::max(next.norm(), 1e-300);
+    z = thresholds::kFeedbackRelaxation * next + (1.0 - thresholds::kFeedbackRelaxation) * z;
+    if (!z.allFinite()) break;
+    if (change <= thresholds::kFeedbackTolerance * size) return z;
+  }
+  z.setConstant(std::numeric_limits<double>::quiet_NaN());
+  return z;
+}
+
 // The output-placed nonlinearities act on z in the bias's static scale.
 void apply_at_output(const Problem& pr, std::span<const AppliedEffect> effects,
                      Eigen::VectorXd& z) {
@@ -165,7 +188,7 @@ ModelOutput model_output(const Problem& pr, std::span<const AppliedEffect> effec
   ModelOutput out;
   const DataScales& s = pr.scales;
   bool input_side = false, feedback = false;
-  const AppliedEffect* loop = nullptr;
+  const AppliedEffect *loop = nullptr, *fb = nullptr;
   Eigen::VectorXd v = pr.u;
   for (const auto& e : effects) {
     if (e.params.size() != parameter_specs(e.effect, s).size() ||
@@ -181,13 +204,18 @@ ModelOutput model_output(const Problem& pr, std::span<const AppliedEffect> effec
       if (loop) throw std::invalid_argument("model_output: two effects in the loop");
       loop = &e;
     }
+    if (e.place == Place::kFeedback) {
+      if (fb) throw std::invalid_argument("model_output: two effects in the feedback");
+      fb = &e;
+    }
   }
   out.tf = augmented_tf(pr.tf, effects);
   Eigen::VectorXd z;
   if (!input_side) {
     z = pr.baseline_z;
   } else {
-    z = linear_output(pr, effects, out.tf, loop, std::move(v), feedback);
+    z = linear_output(pr, effects, out.tf, loop, v, feedback);
+    if (fb) z = close_feedback(pr, effects, out.tf, loop, *fb, v, feedback, std::move(z));
     apply_at_output(pr, effects, z);
     const Eigen::Index n = z.size();
     if (pr.active_from > 0) z.head(pr.active_from) = pr.baseline_z.head(pr.active_from);

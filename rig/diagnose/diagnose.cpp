@@ -34,9 +34,11 @@ using Candidate = std::vector<std::vector<AppliedEffect>>;  // starting points o
 std::vector<Candidate> singles(Effect e, const Problem& pr, const Location& loc) {
   if (kind_of(e) != EffectKind::kInputNonlinearity) return {placed_starts(e, Place::kInput, pr, loc)};
   std::vector<Candidate> out;
-  for (Place place : kAllPlaces)
-    if (place != Place::kInLoop || in_loop_possible(pr.tf))
-      out.push_back(placed_starts(e, place, pr, loc));
+  for (Place place : kAllPlaces) {
+    if (place == Place::kInLoop && !in_loop_possible(pr.tf)) continue;
+    if (place == Place::kFeedback && !effect_model(e).in_feedback) continue;
+    out.push_back(placed_starts(e, place, pr, loc));
+  }
   return out;
 }
 
@@ -105,7 +107,8 @@ std::vector<Candidate> pair_candidates(const std::vector<HypothesisFit>& singles
     for (std::size_t j = i + 1; j < std::min(inputs.size(), kPairedInputSingles); ++j) {
       const AppliedEffect& b = inputs[j]->effects[0];
       if (i >= kPairedInputSingles || (lag(a.effect) && lag(b.effect))) continue;  // twins
-      if (a.place == Place::kInLoop && b.place == Place::kInLoop) continue;  // one front lag
+      if (a.place == b.place && (a.place == Place::kInLoop || a.place == Place::kFeedback))
+        continue;  // one front lag, one feedback path
       out.push_back({{a, b}});
     }
     for (std::size_t j = 0; j < dists.size(); ++j)

@@ -88,6 +88,8 @@ struct EffectModel {
   // The simpler effect this one contains as a special case (hysteresis: backlash), if any:
   // the verdict names the simpler one unless this scores clearly more (diagnose.cpp).
   std::optional<Effect> generalises;
+  // Whether it is also tried in the output feedback (placement.hpp, Place::kFeedback).
+  bool in_feedback = false;
 };
 
 // Throws std::out_of_range for a value outside the enum.

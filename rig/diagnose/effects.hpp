@@ -92,7 +92,7 @@ struct DataScales {
 std::vector<ParamSpec> parameter_specs(Effect effect, const DataScales& scales);
 
 // Where an input-side nonlinearity acts (placement.hpp); other effects are at kInput.
-enum class Place { kInput, kInLoop, kOutput };
+enum class Place { kInput, kInLoop, kOutput, kFeedback };
 const char* to_string(Place place);
 // The parameters a place adds to its effect's (in the loop: front_lag_s).
 std::vector<ParamSpec> place_specs(Place place, const DataScales& scales);

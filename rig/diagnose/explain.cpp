@@ -65,6 +65,12 @@ std::string what_effect_means(const AppliedEffect& e, const HypothesisFit& h, co
         ", not on the bias itself but inside the governor's loop, after a lag of {:.0f} ms "
         "(the actuator or the rack; the values are the bias-% equivalents there)",
         1e3 * e.place_params.at(0));
+  if (e.place == Place::kFeedback)
+    s += fmt::format(
+        ", not on the bias but in a feedback from the output: a restoring force of {:.2f} times "
+        "the output's (bias-% equivalent) departure from that nonlinearity (a hysteretic "
+        "spring, a level that stops rising)",
+        e.place_params.at(0));
   if (e.place == Place::kOutput)
     s += fmt::format(
         ", not on the bias but on the measured output (the values are bias-% equivalents; "

@@ -17,11 +17,15 @@ const char* to_string(Place place) {
       return "in_loop";
     case Place::kOutput:
       return "output";
+    case Place::kFeedback:
+      return "feedback";
   }
   return "?";
 }
 
 std::vector<ParamSpec> place_specs(Place place, const DataScales& s) {
+  if (place == Place::kFeedback)
+    return {{"feedback_gain", -thresholds::kFeedbackGainMax, thresholds::kFeedbackGainMax, false}};
   if (place != Place::kInLoop) return {};
   return {{"front_lag_s", std::max(s.dt_s, thresholds::kFrontLagMinS), thresholds::kFrontLagMaxS,
            true}};
@@ -54,7 +58,7 @@ Problem problem_at(const Problem& pr, Place place, double front_lag_s) {
   if (place == Place::kInLoop) {
     const Eigen::VectorXd w = front_signal(pr.u, front_lag_s, pr.dt_s);
     at.u = in_loop_scale(pr, w) * w;
-  } else if (place == Place::kOutput) {
+  } else if (place == Place::kOutput || place == Place::kFeedback) {
     at.u = pr.baseline_z / pr.scales.dc_gain;
   } else {
     return at;
@@ -66,6 +70,13 @@ Problem problem_at(const Problem& pr, Place place, double front_lag_s) {
 std::vector<std::vector<AppliedEffect>> placed_starts(Effect effect, Place place,
                                                       const Problem& pr, const Location& loc) {
   std::vector<std::vector<AppliedEffect>> out;
+  if (place == Place::kFeedback) {
+    const Problem at = problem_at(pr, place, 0.0);
+    for (auto& p : seeds_for(effect, at, loc))
+      for (const double c : thresholds::kFeedbackGainSeeds)
+        out.push_back({AppliedEffect{effect, p, place, {c}}});
+    return out;
+  }
   if (place != Place::kInLoop) {
     const Problem at = problem_at(pr, place, 0.0);
     for (auto& p : seeds_for(effect, at, loc)) out.push_back({AppliedEffect{effect, p, place, {}}});

@@ -5,6 +5,10 @@
 //            lag: the actuator or the rack; T_f, front_lag_s, is fitted; a
 //            Wiener-Hammerstein structure whose linear part is G for any T_f)
 //   output   u -> G -> G0 N(. / G0)                   (on the measured output)
+//   feedback u - c (y' - N(y')) -> G -> y, y' = y / G0 (a restoring force that depends on
+//            the output nonlinearly, as in a nonlinear state-space or linear-fractional
+//            model: a hysteretic spring, a level that stops rising; c, feedback_gain, fitted;
+//            only for effects whose model allows it, EffectModel::in_feedback)
 // At each place the nonlinearity acts on a signal on the bias's scale: in the loop F u times
 // k = std(u) / std(F u) (the signal there, as many bias-% as it has the bias's rms: how a
 // rack's travel per % of bias is measured), at the output the output over the static gain
@@ -23,8 +27,8 @@ namespace rig::diagnose {
 struct Problem;
 struct Location;
 
-inline constexpr std::array<Place, 3> kAllPlaces = {Place::kInput, Place::kInLoop,
-                                                    Place::kOutput};
+inline constexpr std::array<Place, 4> kAllPlaces = {Place::kInput, Place::kInLoop,
+                                                    Place::kOutput, Place::kFeedback};
 
 // Whether the baseline allows the in-loop place (G / F proper: G strictly proper).
 bool in_loop_possible(const model::TransferFunction& tf);

@@ -163,6 +163,7 @@ std::string placed_name(const HypothesisFit& h) {
     s += to_string(e.effect);
     if (e.place == Place::kInLoop) s += " (in the loop)";
     if (e.place == Place::kOutput) s += " (at the output)";
+    if (e.place == Place::kFeedback) s += " (in an output feedback)";
   }
   return s;
 }

@@ -149,6 +149,9 @@ model::ModelFile augmented_model(const DiagnoseResult& r, const model::ModelFile
                                        "tf times (1 + s front_lag_s)"
                                  : e.place == Place::kOutput
                                      ? "output: on the tf's output over its static gain"
+                                 : e.place == Place::kFeedback
+                                     ? "feedback: u - feedback_gain (y' - N(y')) into the tf, "
+                                       "y' = its output over its static gain"
                                      : "input, before the tf")
                           : kind_of(e.effect) == EffectKind::kFeedback
                               ? "output feedback around the tf's rational part"

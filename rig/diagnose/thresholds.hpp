@@ -102,5 +102,17 @@ inline constexpr double kFrontLagMinS = 0.005;
 inline constexpr double kFrontLagMaxS = 2.0;
 // Its starting points: an actuator (50 ms) and a governor's filtered output (300 ms).
 inline constexpr double kFrontLagSeedsS[] = {0.05, 0.3};
+// The feedback place's gain c: the output's nonlinear part fed back, as a share of the
+// force the model's own static stiffness (1/G0) makes; above 1.5 the loop would hold more
+// than the whole restoring force (and its fixed point stops converging).
+inline constexpr double kFeedbackGainMax = 1.5;
+inline constexpr double kFeedbackGainSeeds[] = {0.3, -0.3};
+// The feedback place's loop is solved by fixed-point iteration over the whole record: at
+// most this many passes, until the output changes by less than this share of its rms.
+// Each pass moves this share of the way (under-relaxed: a lightly damped mode makes the
+// plain iteration overshoot).
+inline constexpr int kFeedbackPasses = 16;
+inline constexpr double kFeedbackRelaxation = 0.6;
+inline constexpr double kFeedbackTolerance = 1e-4;
 
 }  // namespace rig::diagnose::thresholds

@@ -53,6 +53,7 @@ const EffectModel kHysteresisEffect{
     .apply_input = apply,
     .explain = meaning,
     .generalises = Effect::kBacklash,  // shape_ratio 1: a play
+    .in_feedback = true,               // a hysteretic spring (the Bouc-Wen oscillator)
 };
 
 }  // namespace rig::diagnose
