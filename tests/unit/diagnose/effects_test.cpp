@@ -64,6 +64,22 @@ TEST(Effects, ResonancePeaksByItsRatioAndIsFlatAway) {
   EXPECT_NEAR(std::abs(ratio(Effect::kResonance, {3.0, 0.05, 2.5, 1.0}, 0.05)), 1.0, 1e-3);
 }
 
+TEST(Effects, ResonanceInSeriesPeaksAtItsModeAndRollsOffAbove) {
+  const std::vector<double> mode = {4.0, 0.1, 0.05, 0.0};  // hf_gain 0: a mode in series
+  EXPECT_NEAR(std::abs(ratio(Effect::kResonance, mode, 4.0)), 1.0 / (2 * 0.1), 0.05 * 5.0);
+  EXPECT_NEAR(std::abs(ratio(Effect::kResonance, mode, 0.05)), 1.0, 1e-3);
+  EXPECT_LT(std::abs(ratio(Effect::kResonance, mode, 40.0)), 0.02);
+}
+
+TEST(Effects, KinkChangesTheSlopeAboveTheOperatingPointOnly) {
+  Problem pr;
+  const Eigen::VectorXd u = Eigen::VectorXd::LinSpaced(201, -2.0, 2.0);
+  const Eigen::VectorXd v =
+      effect_model(Effect::kStaticNonlinearity).apply_input(pr, {0.0, 0.0, 0.5}, u);
+  EXPECT_NEAR(v(200) - v(150), 1.5 * (u(200) - u(150)), 1e-12);  // above: 1 + 0.5
+  EXPECT_NEAR(v(50) - v(0), u(50) - u(0), 1e-12);                // below: unchanged
+}
+
 TEST(Effects, AcCouplingIsAHighPass) {
   const double rc = 2.0, fc = 1.0 / (2 * std::numbers::pi * rc);
   EXPECT_NEAR(std::abs(ratio(Effect::kAcCoupling, {rc}, fc)), 1.0 / std::sqrt(2.0), 1e-9);

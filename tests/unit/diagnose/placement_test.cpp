@@ -1,0 +1,99 @@
+// Where an input-side nonlinearity sits (placement.hpp) and the sampling convention as a
+// nuisance (timing.hpp), on records made from the nominal genset model.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+
+#include "concealed.hpp"
+#include "rig/diagnose/blocks.hpp"
+#include "rig/diagnose/diagnose.hpp"
+#include "rig/diagnose/placement.hpp"
+
+namespace rig::diagnose {
+namespace {
+
+// The null case's record (its input and the nominal model), 200 s.
+DiagnoseInput null_record(std::uint64_t seed) {
+  ConcealedSpec spec;
+  spec.seed = seed;
+  spec.duration_s = 200.0;
+  return make_concealed(spec).input;
+}
+
+Eigen::VectorXd white(Eigen::Index n, double std, std::uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  std::normal_distribution<double> g(0.0, std);
+  Eigen::VectorXd x(n);
+  for (auto& v : x) v = g(rng);
+  return x;
+}
+
+double rms(const Eigen::VectorXd& x) { return std::sqrt((x.array() - x.mean()).square().mean()); }
+
+TEST(Placement, RateLimitBehindTheGovernorsLagIsFoundInTheLoop) {
+  DiagnoseInput in = null_record(41);
+  const double lag_s = 0.15;
+  const Eigen::VectorXd u = in.u.array() - in.u.mean();
+  const Eigen::VectorXd w = front_signal(u, lag_s, in.dt_s);
+  const double k = rms(u) / rms(w);
+  const Eigen::VectorXd w_rate = (w.tail(w.size() - 1) - w.head(w.size() - 1)) / in.dt_s;
+  const double limit = 0.5 * k * rms(w_rate);  // bias-% equivalent per second
+  const Eigen::VectorXd v = rate_limit(k * w, limit, in.dt_s) / k;
+  const Eigen::VectorXd z = model::simulate(rest_after_front(in.model, lag_s), v, in.dt_s);
+  in.y = z + white(z.size(), 0.15 * rms(z), 7);
+  const DiagnoseResult r = diagnose(in);
+  ASSERT_EQ(r.verdict, "rate_limit") << r.explanation;
+  const AppliedEffect& e = r.chosen()->effects.front();
+  EXPECT_EQ(e.place, Place::kInLoop) << r.explanation;
+  EXPECT_NEAR(e.params[0], limit, 0.2 * limit) << r.explanation;
+  EXPECT_NE(r.explanation.find("inside the governor's loop"), std::string::npos);
+}
+
+TEST(Placement, ADeadbandOnTheBiasIsAtTheInputAndTriedAtEachPlace) {
+  DiagnoseInput in = null_record(42);
+  const Eigen::VectorXd u = in.u.array() - in.u.mean();
+  const Eigen::VectorXd z = model::simulate(in.model, deadband(u, 0.4 * rms(u)), in.dt_s);
+  in.y = z + white(z.size(), 0.1 * rms(z), 8);
+  const DiagnoseResult r = diagnose(in);
+  ASSERT_EQ(r.verdict, "deadband") << r.explanation;
+  EXPECT_EQ(r.chosen()->effects.front().place, Place::kInput) << r.explanation;
+  int places[4] = {0, 0, 0, 0};
+  for (const auto& h : r.hypotheses)
+    if (h.effects.size() == 1 && h.effects[0].effect == Effect::kDeadband)
+      ++places[static_cast<int>(h.effects[0].place)];
+  EXPECT_EQ(places[0], 1);
+  EXPECT_EQ(places[1], 1);
+  EXPECT_EQ(places[2], 1);
+  EXPECT_EQ(places[3], 0);  // a deadband is not tried in the feedback
+}
+
+TEST(Timing, HalfASampleOfTimingIsANullNotADeadTime) {
+  for (const double shift : {0.5, -0.45}) {
+    DiagnoseInput in = null_record(43);
+    const Eigen::VectorXd u = in.u.array() - in.u.mean();
+    model::TransferFunction plant = in.model;
+    plant.delay_s += shift * in.dt_s;
+    const Eigen::VectorXd z = model::simulate(plant, u, in.dt_s);
+    in.y = z + white(z.size(), 0.02 * rms(z), 9);  // little noise: half a sample shows
+    const DiagnoseResult r = diagnose(in);
+    EXPECT_EQ(r.verdict, "none") << shift << ": " << r.explanation;
+    EXPECT_NEAR(r.timing_nuisance_s, shift * in.dt_s, 0.1 * in.dt_s) << shift;
+  }
+}
+
+TEST(Timing, TwoSamplesOfDelayAreStillADeadTime) {
+  DiagnoseInput in = null_record(44);
+  const Eigen::VectorXd u = in.u.array() - in.u.mean();
+  model::TransferFunction plant = in.model;
+  plant.delay_s += 2.0 * in.dt_s;
+  const Eigen::VectorXd z = model::simulate(plant, u, in.dt_s);
+  in.y = z + white(z.size(), 0.05 * rms(z), 10);
+  const DiagnoseResult r = diagnose(in);
+  ASSERT_EQ(r.verdict, "dead_time") << r.explanation;
+  EXPECT_NEAR(r.chosen()->effects.front().params[0], 2.0 * in.dt_s, 0.3 * in.dt_s);
+  EXPECT_EQ(r.timing_nuisance_s, 0.0);
+}
+
+}  // namespace
+}  // namespace rig::diagnose
