@@ -69,7 +69,7 @@ std::string what_effect_means(const AppliedEffect& e, const HypothesisFit& h, co
     s += fmt::format(
         ", not on the bias but in a feedback from the output: a restoring force of {:.2f} times "
         "the output's (bias-% equivalent) departure from that nonlinearity (a hysteretic "
-        "spring, a level that stops rising)",
+        "spring)",
         e.place_params.at(0));
   if (e.place == Place::kOutput)
     s += fmt::format(

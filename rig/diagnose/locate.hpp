@@ -54,7 +54,13 @@ struct AmplitudeLocation {
   LevelBin positive, negative;     // u >= 0 / u < 0
   LevelBin rising, falling;        // gain field: +-coefficient of G sign(du/dt)
   double level_chi2 = 0.0, sign_z = 0.0, direction_z = 0.0;
+  // The model output's own level: r regressed on yhat restricted to each fifth of its signed
+  // level (a static map that bends or stops at the output, a tank that overflows), chi^2
+  // against one common gain. Reported, not part of the decision: it fired (33.7 against
+  // 23.5) on a nominal plantsim record behind a declared AC coupling.
+  double output_level_chi2 = 0.0;
   bool amplitude_dependent = false, sign_dependent = false, direction_dependent = false;
+  bool output_level_dependent = false;
 };
 
 using ident::residual_tests;

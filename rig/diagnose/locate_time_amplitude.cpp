@@ -154,6 +154,28 @@ Eigen::VectorXd masked_response(const Problem& pr, const Eigen::VectorXd& u) {
   return detrend(pr, z);
 }
 
+// chi^2(4) at 1e-4: the level tests' bound (a false alarm in 10 000 records per test).
+constexpr double kLevelChi2Bound = 23.51;
+
+// r on yh restricted to each of nb quantile bands of yh's signed level, against r on yh.
+double output_level_chi2(const Eigen::VectorXd& yh, const Eigen::VectorXd& r, double n_eff,
+                         int nb) {
+  const Eigen::Index m = yh.size();
+  std::vector<double> levels(yh.data(), yh.data() + m);
+  std::vector<double> edges;
+  for (int b = 1; b < nb; ++b) edges.push_back(quantile(levels, static_cast<double>(b) / nb));
+  edges.push_back(std::numeric_limits<double>::infinity());
+  Eigen::MatrixXd x = Eigen::MatrixXd::Zero(m, nb);
+  for (Eigen::Index k = 0; k < m; ++k) {
+    int b = 0;
+    while (yh(k) > edges[static_cast<std::size_t>(b)]) ++b;
+    x(k, b) = yh(k);
+  }
+  const Ls one = least_squares(yh, r), full = least_squares(x, r);
+  const double s2 = full.rss / std::max(1.0, n_eff - nb);
+  return (one.rss - full.rss) / std::max(s2, 1e-300);
+}
+
 }  // namespace
 
 AmplitudeLocation locate_amplitude(const Problem& pr, const Eigen::VectorXd& r_all,
@@ -228,8 +250,10 @@ AmplitudeLocation locate_amplitude(const Problem& pr, const Eigen::VectorXd& r_a
   a.direction_z = dir.beta(1) / sd;
   a.rising = {0.0, dir.beta(1), sd};  // the play: -beta is the half-width in input units
   a.falling = {0.0, -dir.beta(1), sd};
+  a.output_level_chi2 = output_level_chi2(yh, r, n_eff, nb);
+  a.output_level_dependent = a.output_level_chi2 > kLevelChi2Bound;
   const double spread = a.by_level.back().gain - a.by_level.front().gain;
-  a.amplitude_dependent = a.level_chi2 > 23.51 && std::abs(spread) > 0.02;
+  a.amplitude_dependent = a.level_chi2 > kLevelChi2Bound && std::abs(spread) > 0.02;
   a.sign_dependent = std::abs(a.sign_z) > 5.0;
   a.direction_dependent = std::abs(a.direction_z) > 5.0;
   return a;

@@ -7,7 +7,7 @@
 //   output   u -> G -> G0 N(. / G0)                   (on the measured output)
 //   feedback u - c (y' - N(y')) -> G -> y, y' = y / G0 (a restoring force that depends on
 //            the output nonlinearly, as in a nonlinear state-space or linear-fractional
-//            model: a hysteretic spring, a level that stops rising; c, feedback_gain, fitted;
+//            model: a hysteretic spring; c, feedback_gain, fitted;
 //            only for effects whose model allows it, EffectModel::in_feedback)
 // At each place the nonlinearity acts on a signal on the bias's scale: in the loop F u times
 // k = std(u) / std(F u) (the signal there, as many bias-% as it has the bias's rms: how a

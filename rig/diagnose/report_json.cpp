@@ -77,6 +77,8 @@ json location_json(const DiagnoseResult& r) {
           {"amplitude",
            {{"by_level", levels},
             {"level_chi2", loc.amp.level_chi2},
+            {"output_level_chi2", loc.amp.output_level_chi2},
+            {"output_level_dependent", loc.amp.output_level_dependent},
             {"level_dependent", loc.amp.amplitude_dependent},
             {"sign_z", loc.amp.sign_z},
             {"sign_dependent", loc.amp.sign_dependent},

@@ -85,7 +85,6 @@ const EffectModel kSaturationEffect{
     .apply_input = apply,
     .explain = meaning,
     .map_to_plant = to_plant,
-    .in_feedback = true,  // a state that stops rising (a tank overflowing)
 };
 
 }  // namespace rig::diagnose

@@ -93,7 +93,7 @@ std::vector<double> true_params(Effect e, const DataScales& s, const model::Tran
     case Effect::kDrift:
       return {30.0};
     case Effect::kHysteresis:
-      return {0.3 * su, 0.0};
+      return {0.3 * su, 0.0, 1.0, -1.0};  // a play-type loop: v = u - z
   }
   return {};
 }
