@@ -26,6 +26,7 @@ using thresholds::kPairedWithDisturbance;
 using thresholds::kDominantDisturbanceGainPct;
 using thresholds::kNonlinearOverLinearPct;
 using thresholds::kNestedMarginPct;
+using thresholds::kDirectionEvidenceZ;
 
 using Candidate = std::vector<std::vector<AppliedEffect>>;  // starting points of one hypothesis
 
@@ -60,6 +61,14 @@ std::vector<HypothesisFit> fit_all(const Problem& pr, const std::vector<Candidat
 bool has_input_side(const HypothesisFit& h) {
   return std::any_of(h.effects.begin(), h.effects.end(), [](const AppliedEffect& e) {
     return kind_of(e.effect) != EffectKind::kDisturbance;
+  });
+}
+
+// Every effect of h that needs the direction test's evidence has it (thresholds.hpp).
+bool direction_evidenced(const HypothesisFit& h, const Location& loc) {
+  return std::none_of(h.effects.begin(), h.effects.end(), [&](const AppliedEffect& e) {
+    return effect_model(e.effect).needs_direction_evidence &&
+           std::abs(loc.amp.direction_z) < kDirectionEvidenceZ;
   });
 }
 
@@ -166,6 +175,7 @@ int choose_raw(const DiagnoseResult& r, double min_gain, bool linear_only = fals
     const auto& h = r.hypotheses[i];
     if (h.score < min_gain) break;
     if (linear_only && has_nonlinearity(h)) continue;
+    if (!direction_evidenced(h, r.location)) continue;
     if (immaterial_drift(h, r.problem) || sampling_convention_only(h, r.problem)) continue;
     if (best_any < 0) best_any = static_cast<int>(i);
     if (!input) return static_cast<int>(i);

@@ -90,6 +90,10 @@ struct EffectModel {
   std::optional<Effect> generalises;
   // Whether it is also tried in the output feedback (placement.hpp, Place::kFeedback).
   bool in_feedback = false;
+  // Whether it can be the verdict only when the location's direction test saw the output
+  // depend on the input's direction of motion (a play or a hysteresis loop does; with a
+  // fitted place and shares it could otherwise stand in for a deadband or a gain).
+  bool needs_direction_evidence = false;
 };
 
 // Throws std::out_of_range for a value outside the enum.

@@ -30,6 +30,12 @@ inline constexpr double kNonlinearOverLinearPct = 0.75;
 // than the fitting noise of two placed nonlinearities.
 inline constexpr double kNestedMarginPct = 1.0;
 
+// A play or a hysteresis loop is the verdict only when the location's direction test
+// (the residual on G(sign du/dt), locate_time_amplitude.cpp) gives |z| >= 3: a direction
+// effect at three standard errors. On gensim every play and hysteresis case shows
+// |z| 2.8-8.7 (2.8 the one present in half the record), every deadband case 0.2-1.5.
+inline constexpr double kDirectionEvidenceZ = 3.0;
+
 // --- Pairs (diagnose.cpp) ---
 // Only the best input-side singles are paired with each other (every pair is a full fit).
 inline constexpr std::size_t kPairedInputSingles = 3;

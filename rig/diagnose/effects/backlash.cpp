@@ -55,6 +55,7 @@ const EffectModel kBacklashEffect{
     .apply_input = apply,
     .explain = meaning,
     .map_to_plant = to_plant,
+    .needs_direction_evidence = true,
 };
 
 }  // namespace rig::diagnose

@@ -70,6 +70,7 @@ const EffectModel kHysteresisEffect{
     .explain = meaning,
     .generalises = Effect::kBacklash,  // shape_ratio 1: a play
     .in_feedback = true,               // a hysteretic spring (the Bouc-Wen oscillator)
+    .needs_direction_evidence = true,
 };
 
 }  // namespace rig::diagnose
