@@ -38,10 +38,11 @@ struct HypothesisFit {
 struct FitOptions {
   double penalty_pct_per_parameter = thresholds::kPenaltyPctPerParameter;
   int max_evaluations = 120;  // model simulations per start
-  // The starting points with the lowest cost searched from (each is evaluated once first):
+  // The starting points with the lowest cost searched from (each is evaluated once first;
+  // with two, plantsim's rack limit in seed 1 started from a wrong basin: -96 %, with three 6 %):
   // the others start where the cost is already higher, and each search costs up to
   // max_evaluations simulations of the whole record.
-  std::size_t searched_starts = 2;
+  std::size_t searched_starts = 3;
 };
 
 // `starts`: initial parameter sets of the same effects (at least one).
