@@ -27,6 +27,8 @@ using thresholds::kDominantDisturbanceGainPct;
 using thresholds::kNonlinearOverLinearPct;
 using thresholds::kNestedMarginPct;
 using thresholds::kDirectionEvidenceZ;
+using thresholds::kRefinedSingles;
+using thresholds::kScreenEvaluations;
 
 using Candidate = std::vector<std::vector<AppliedEffect>>;  // starting points of one hypothesis
 
@@ -56,6 +58,29 @@ std::vector<HypothesisFit> fit_all(const Problem& pr, const std::vector<Candidat
   work();
   for (auto& t : pool) t.join();
   return out;
+}
+
+void rank(std::vector<HypothesisFit>& hs);
+
+// Every single hypothesis is fitted with a short search (a screen), and the best few are
+// then searched in full from where the screen stopped (thresholds.hpp).
+std::vector<HypothesisFit> screen_and_refine(const Problem& pr, const std::vector<Candidate>& cands,
+                                             const Eigen::VectorXd& base,
+                                             const DiagnoseOptions& o) {
+  DiagnoseOptions screen = o;
+  screen.fit.max_evaluations = std::min(o.fit.max_evaluations, kScreenEvaluations);
+  std::vector<HypothesisFit> hs = fit_all(pr, cands, base, screen);
+  rank(hs);
+  const std::size_t k = std::min(hs.size(), kRefinedSingles);
+  std::vector<Candidate> best;
+  for (std::size_t i = 0; i < k; ++i) best.push_back({hs[i].effects});
+  std::vector<HypothesisFit> refined = fit_all(pr, best, base, o);
+  for (std::size_t i = 0; i < k; ++i) {
+    refined[i].evaluations += hs[i].evaluations;
+    hs[i] = std::move(refined[i]);
+  }
+  rank(hs);
+  return hs;
 }
 
 bool has_input_side(const HypothesisFit& h) {
@@ -288,8 +313,7 @@ DiagnoseResult diagnose(const DiagnoseInput& in, const DiagnoseOptions& o) {
     std::vector<Candidate> cands;
     for (Effect e : applicable(pr, r.location, o))
       for (auto& c : singles(e, pr, r.location)) cands.push_back(std::move(c));
-    r.hypotheses = fit_all(pr, cands, base.yhat, o);
-    rank(r.hypotheses);
+    r.hypotheses = screen_and_refine(pr, cands, base.yhat, o);
     refine_onsets(pr, r.hypotheses, base.yhat, o.fit);
     add_sensor_lag_twin(pr, r.hypotheses, o.fit);
     rank(r.hypotheses);

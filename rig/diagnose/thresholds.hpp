@@ -36,6 +36,14 @@ inline constexpr double kNestedMarginPct = 1.0;
 // |z| 2.8-8.7 (2.8 the one present in half the record), every deadband case 0.2-1.5.
 inline constexpr double kDirectionEvidenceZ = 3.0;
 
+// --- Speed: screening the singles (diagnose.cpp) ---
+// Every single hypothesis (each effect at each place: about 35) is first searched with at
+// most this many simulations per starting point ...
+inline constexpr int kScreenEvaluations = 30;
+// ... and only this many of the best are then searched in full (FitOptions), from where the
+// screen stopped: the rest are ranked well below the verdict's margins already.
+inline constexpr std::size_t kRefinedSingles = 8;
+
 // --- Pairs (diagnose.cpp) ---
 // Only the best input-side singles are paired with each other (every pair is a full fit).
 inline constexpr std::size_t kPairedInputSingles = 3;
