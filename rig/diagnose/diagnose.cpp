@@ -17,16 +17,16 @@
 namespace rig::diagnose {
 namespace {
 
+using thresholds::kDirectionEvidenceZ;
+using thresholds::kDominantDisturbanceGainPct;
 using thresholds::kDriftMaterialFraction;
 using thresholds::kDriftMaterialGainPct;
 using thresholds::kDriftMaterialOfLevel;
+using thresholds::kNestedMarginPct;
+using thresholds::kNonlinearOverLinearPct;
 using thresholds::kOperatingLevelStds;
 using thresholds::kPairedInputSingles;
 using thresholds::kPairedWithDisturbance;
-using thresholds::kDominantDisturbanceGainPct;
-using thresholds::kNonlinearOverLinearPct;
-using thresholds::kNestedMarginPct;
-using thresholds::kDirectionEvidenceZ;
 using thresholds::kRefinedSingles;
 using thresholds::kScreenEvaluations;
 
@@ -35,7 +35,8 @@ using Candidate = std::vector<std::vector<AppliedEffect>>;  // starting points o
 // One effect's hypotheses: an input-side nonlinearity at each place it can sit
 // (placement.hpp), any other effect once.
 std::vector<Candidate> singles(Effect e, const Problem& pr, const Location& loc) {
-  if (kind_of(e) != EffectKind::kInputNonlinearity) return {placed_starts(e, Place::kInput, pr, loc)};
+  if (kind_of(e) != EffectKind::kInputNonlinearity)
+    return {placed_starts(e, Place::kInput, pr, loc)};
   std::vector<Candidate> out;
   for (Place place : kAllPlaces) {
     if (place == Place::kInLoop && !in_loop_possible(pr.tf)) continue;

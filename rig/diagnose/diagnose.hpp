@@ -48,7 +48,7 @@ struct DiagnoseResult {
   std::optional<double> level_shift_time_s;  // an operating-point step (split.hpp), if any
   double level_shift = 0.0;                  // its size, output units
   double timing_nuisance_s = 0.0;  // the dead time shift within +-dt/2 absorbed (timing.hpp)
-  double fit_before_pct = 0.0;               // whole record after the warm-up
+  double fit_before_pct = 0.0;     // whole record after the warm-up
   double validation_fit_before_pct = 0.0;
   int blocks = 0;
   Eigen::Index warmup = 0;

@@ -87,9 +87,10 @@ std::string level_shift_words(const DiagnoseResult& r) {
   const double level = r.problem.y_level - r.level_shift * after;
   const std::string of_level =
       std::abs(level) > 0.0
-          ? fmt::format(" ({:+.1f} % of the operating level before it, {:.4g}: a gain change of x{:.3f} "
-                        "with the level in it steps it by as much)",
-                        100.0 * r.level_shift / level, level, 1.0 + r.level_shift / level)
+          ? fmt::format(
+                " ({:+.1f} % of the operating level before it, {:.4g}: a gain change of x{:.3f} "
+                "with the level in it steps it by as much)",
+                100.0 * r.level_shift / level, level, 1.0 + r.level_shift / level)
           : "";
   return fmt::format(
       "The recorded level steps by {:+.4g} at {:.1f} s{} (an operating-point change, or a gain "

@@ -67,8 +67,8 @@ Problem problem_at(const Problem& pr, Place place, double front_lag_s) {
   return at;
 }
 
-std::vector<std::vector<AppliedEffect>> placed_starts(Effect effect, Place place,
-                                                      const Problem& pr, const Location& loc) {
+std::vector<std::vector<AppliedEffect>> placed_starts(Effect effect, Place place, const Problem& pr,
+                                                      const Location& loc) {
   std::vector<std::vector<AppliedEffect>> out;
   if (place == Place::kFeedback) {
     const Problem at = problem_at(pr, place, 0.0);

@@ -27,8 +27,8 @@ namespace rig::diagnose {
 struct Problem;
 struct Location;
 
-inline constexpr std::array<Place, 4> kAllPlaces = {Place::kInput, Place::kInLoop,
-                                                    Place::kOutput, Place::kFeedback};
+inline constexpr std::array<Place, 4> kAllPlaces = {Place::kInput, Place::kInLoop, Place::kOutput,
+                                                    Place::kFeedback};
 
 // Whether the baseline allows the in-loop place (G / F proper: G strictly proper).
 bool in_loop_possible(const model::TransferFunction& tf);

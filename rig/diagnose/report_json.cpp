@@ -25,7 +25,8 @@ json hypothesis_json(const HypothesisFit& h, const Problem& pr) {
       params[h.effects.size() > 1 ? std::string(to_string(e.effect)) + "." + place[i].name
                                   : place[i].name] = number_or_null(e.place_params[i]);
     }
-    effects.push_back({{"effect", to_string(e.effect)}, {"place", to_string(e.place)}, {"params", p}});
+    effects.push_back(
+        {{"effect", to_string(e.effect)}, {"place", to_string(e.place)}, {"params", p}});
   }
   json derived = json::object();
   for (const auto& [k, v] : h.derived) derived[k] = number_or_null(v);
@@ -143,22 +144,20 @@ model::ModelFile augmented_model(const DiagnoseResult& r, const model::ModelFile
       json p = json::object();
       for (std::size_t i = 0; i < e.params.size(); ++i) p[specs[i].name] = e.params[i];
       const auto place = place_specs(e.place, r.problem.scales);
-      for (std::size_t i = 0; i < e.place_params.size(); ++i)
-        p[place[i].name] = e.place_params[i];
-      const char* where = kind_of(e.effect) == EffectKind::kInputNonlinearity
-                              ? (e.place == Place::kInLoop
-                                     ? "in the loop: after 1/(1 + s front_lag_s), before the "
-                                       "tf times (1 + s front_lag_s)"
-                                 : e.place == Place::kOutput
-                                     ? "output: on the tf's output over its static gain"
-                                 : e.place == Place::kFeedback
-                                     ? "feedback: u - feedback_gain (y' - N(y')) into the tf, "
-                                       "y' = its output over its static gain"
-                                     : "input, before the tf")
-                          : kind_of(e.effect) == EffectKind::kFeedback
-                              ? "output feedback around the tf's rational part"
-                          : kind_of(e.effect) == EffectKind::kDisturbance ? "added to the output"
-                                                                          : "in num/den/delay_s";
+      for (std::size_t i = 0; i < e.place_params.size(); ++i) p[place[i].name] = e.place_params[i];
+      const char* where =
+          kind_of(e.effect) == EffectKind::kInputNonlinearity
+              ? (e.place == Place::kInLoop ? "in the loop: after 1/(1 + s front_lag_s), before the "
+                                             "tf times (1 + s front_lag_s)"
+                 : e.place == Place::kOutput ? "output: on the tf's output over its static gain"
+                 : e.place == Place::kFeedback
+                     ? "feedback: u - feedback_gain (y' - N(y')) into the tf, "
+                       "y' = its output over its static gain"
+                     : "input, before the tf")
+          : kind_of(e.effect) == EffectKind::kFeedback
+              ? "output feedback around the tf's rational part"
+          : kind_of(e.effect) == EffectKind::kDisturbance ? "added to the output"
+                                                          : "in num/den/delay_s";
       aug.push_back({{"effect", to_string(e.effect)}, {"params", p}, {"acts", where}});
     }
     json derived = json::object();

@@ -3,7 +3,8 @@
 // (shape_ratio) or at once (1); the output is v = a u + b z:
 //   a play      (a 1, b -1): v = u - z, every sustained movement lags by up to half_width;
 //   elasto-plastic (b > 0): v follows small movements with slope a + b and yields beyond
-//               +-half_width to slope a (a linkage or spring that slips, gensim's actuator). Plant: no plantsim parameter models a rounded loop; the nearest is the backlash
+//               +-half_width to slope a (a linkage or spring that slips, gensim's actuator). Plant:
+//               no plantsim parameter models a rounded loop; the nearest is the backlash
 // width, which the note names.
 #include <fmt/format.h>
 
@@ -33,8 +34,11 @@ std::vector<ParamSpec> specs(const DataScales& s) {
 
 std::vector<Params> seeds(const Problem& pr, const Location&) {
   const double su = pr.scales.u_std;
-  return {{0.1 * su, 0.5, 1.0, -1.0}, {0.4 * su, 0.0, 1.0, -1.0}, {0.2 * su, -0.5, 1.0, -1.0},
-          {0.5 * su, 0.9, 0.3, 0.7},  {1.0 * su, 0.9, 0.3, 0.7}};
+  return {{0.1 * su, 0.5, 1.0, -1.0},
+          {0.4 * su, 0.0, 1.0, -1.0},
+          {0.2 * su, -0.5, 1.0, -1.0},
+          {0.5 * su, 0.9, 0.3, 0.7},
+          {1.0 * su, 0.9, 0.3, 0.7}};
 }
 
 Eigen::VectorXd apply(const Problem&, const Params& p, Eigen::VectorXd v) {

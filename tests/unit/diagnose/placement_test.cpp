@@ -1,5 +1,7 @@
 // Where an input-side nonlinearity sits (placement.hpp) and the sampling convention as a
 // nuisance (timing.hpp), on records made from the nominal genset model.
+#include "rig/diagnose/placement.hpp"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -8,7 +10,6 @@
 #include "concealed.hpp"
 #include "rig/diagnose/blocks.hpp"
 #include "rig/diagnose/diagnose.hpp"
-#include "rig/diagnose/placement.hpp"
 
 namespace rig::diagnose {
 namespace {
