@@ -5,9 +5,11 @@
 #include <chrono>
 #include <cmath>
 #include <functional>
+#include <numbers>
 #include <optional>
 #include <stdexcept>
 #include <thread>
+#include <type_traits>
 
 #include "rig/diagnose/effect_registry.hpp"
 #include "rig/diagnose/placement.hpp"
@@ -29,6 +31,9 @@ using thresholds::kPairedInputSingles;
 using thresholds::kPairedWithDisturbance;
 using thresholds::kRefinedSingles;
 using thresholds::kScreenEvaluations;
+using thresholds::kScreenMaxDecimation;
+using thresholds::kScreenMinSamples;
+using thresholds::kScreenOversampling;
 
 using Candidate = std::vector<std::vector<AppliedEffect>>;  // starting points of one hypothesis
 
@@ -63,6 +68,40 @@ std::vector<HypothesisFit> fit_all(const Problem& pr, const std::vector<Candidat
 
 void rank(std::vector<HypothesisFit>& hs);
 
+// The screen's decimation: keep kScreenOversampling samples per period of the highest
+// excited frequency, at most kScreenMaxDecimation, none for a short record.
+int screen_decimation(const Problem& pr) {
+  if (pr.u.size() < kScreenMinSamples) return 1;
+  double band_hz = 0.0;  // the input's band: its rate over its rms, as a frequency
+  band_hz = pr.scales.u_rate_std / (2.0 * std::numbers::pi * std::max(pr.scales.u_std, 1e-300));
+  const int f = static_cast<int>(std::floor(1.0 / (pr.dt_s * kScreenOversampling *
+                                                   std::max(band_hz, 1e-9))));
+  return std::clamp(f, 1, kScreenMaxDecimation);
+}
+
+// Every f-th sample of the problem (the input and output as recorded, the weights and
+// spans with them), its derived fields rebuilt.
+Problem decimated(const Problem& pr, int f) {
+  if (f <= 1) return pr;
+  Problem out = pr;
+  const Eigen::Index n = (pr.u.size() + f - 1) / f;
+  auto pick = [&](const auto& x) {
+    std::decay_t<decltype(x)> y(n);
+    for (Eigen::Index i = 0; i < n; ++i) y(i) = x(i * f);
+    return y;
+  };
+  out.u = pick(pr.u);
+  out.y = pick(pr.y);
+  out.est_weight = pick(pr.est_weight);
+  out.val_weight = pick(pr.val_weight);
+  out.dt_s = pr.dt_s * f;
+  out.active_from = pr.active_from / f;
+  out.active_to = pr.active_to < 0 ? -1 : (pr.active_to + f - 1) / f;
+  out.level_shift_at = pr.level_shift_at < 0 ? -1 : pr.level_shift_at / f;
+  finish_problem(out);
+  return out;
+}
+
 // Every single hypothesis is fitted with a short search (a screen), and the best few are
 // then searched in full from where the screen stopped (thresholds.hpp).
 std::vector<HypothesisFit> screen_and_refine(const Problem& pr, const std::vector<Candidate>& cands,
@@ -70,15 +109,18 @@ std::vector<HypothesisFit> screen_and_refine(const Problem& pr, const std::vecto
                                              const DiagnoseOptions& o) {
   DiagnoseOptions screen = o;
   screen.fit.max_evaluations = std::min(o.fit.max_evaluations, kScreenEvaluations);
-  std::vector<HypothesisFit> hs = fit_all(pr, cands, base, screen);
+  const Problem coarse = decimated(pr, screen_decimation(pr));
+  std::vector<HypothesisFit> hs =
+      fit_all(coarse, cands, model_output(coarse, {}).yhat, screen);
   rank(hs);
   const std::size_t k = std::min(hs.size(), kRefinedSingles);
   std::vector<Candidate> best;
   for (std::size_t i = 0; i < k; ++i) best.push_back({hs[i].effects});
   std::vector<HypothesisFit> refined = fit_all(pr, best, base, o);
-  for (std::size_t i = 0; i < k; ++i) {
-    refined[i].evaluations += hs[i].evaluations;
-    hs[i] = std::move(refined[i]);
+  for (std::size_t i = 0; i < hs.size(); ++i) {
+    const int screened = hs[i].evaluations;
+    hs[i] = i < k ? std::move(refined[i]) : score_hypothesis(pr, hs[i].effects, base, o.fit);
+    hs[i].evaluations += screened;
   }
   rank(hs);
   return hs;

@@ -141,13 +141,19 @@ HypothesisFit fit_hypothesis(const Problem& pr,
     const double cost = f.squaredNorm();
     if (cost < best_cost) best_cost = cost, best_x = x;
   }
+  HypothesisFit h = score_hypothesis(pr, unpack(layout, best_x), baseline_yhat, options);
+  h.evaluations = calls;
+  return h;
+}
+
+HypothesisFit score_hypothesis(const Problem& pr, std::vector<AppliedEffect> effects,
+                               const Eigen::VectorXd& baseline_yhat, const FitOptions& options) {
   HypothesisFit h;
-  h.effects = unpack(layout, best_x);
+  h.effects = std::move(effects);
   ModelOutput mo = model_output(pr, h.effects);
   h.yhat = std::move(mo.yhat);
   h.tf = mo.tf;
   h.derived = std::move(mo.derived);
-  h.evaluations = calls;
   h.active_from = pr.active_from;
   h.active_to = pr.active_to;
   h.fit_before = weighted_fit_pct(pr.y, baseline_yhat, pr.est_weight);

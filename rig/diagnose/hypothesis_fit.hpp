@@ -50,4 +50,8 @@ HypothesisFit fit_hypothesis(const Problem& problem,
                              const std::vector<std::vector<AppliedEffect>>& starts,
                              const Eigen::VectorXd& baseline_yhat, const FitOptions& options);
 
+// The hypothesis with these parameters as they are, scored on the problem (no search).
+HypothesisFit score_hypothesis(const Problem& problem, std::vector<AppliedEffect> effects,
+                               const Eigen::VectorXd& baseline_yhat, const FitOptions& options);
+
 }  // namespace rig::diagnose

@@ -2,6 +2,7 @@
 // gains are in percentage points of the validation fit (DESIGN.md 5); ratios are plain.
 #pragma once
 
+#include <Eigen/Core>
 #include <cstddef>
 
 namespace rig::diagnose::thresholds {
@@ -43,6 +44,13 @@ inline constexpr int kScreenEvaluations = 30;
 // ... and only this many of the best are then searched in full (FitOptions), from where the
 // screen stopped: the rest are ranked well below the verdict's margins already.
 inline constexpr std::size_t kRefinedSingles = 8;
+// The screen runs on every f-th sample of a record of at least kScreenMinSamples samples,
+// f keeping kScreenOversampling samples per period of the input's rms frequency (its rate
+// over its rms, over 2 pi: 2.8 Hz for the rig's 4 Hz Gaussian bias; 10 samples per period
+// keep the simulated response within a few per cent), at most kScreenMaxDecimation.
+inline constexpr Eigen::Index kScreenMinSamples = 20000;
+inline constexpr double kScreenOversampling = 10.0;
+inline constexpr int kScreenMaxDecimation = 4;
 
 // --- Pairs (diagnose.cpp) ---
 // Only the best input-side singles are paired with each other (every pair is a full fit).
