@@ -121,6 +121,7 @@ std::vector<HypothesisFit> screen_and_refine(const Problem& pr, const std::vecto
     const int screened = hs[i].evaluations;
     hs[i] = i < k ? std::move(refined[i]) : score_hypothesis(pr, hs[i].effects, base, o.fit);
     hs[i].evaluations += screened;
+    hs[i].screened_only = i >= k;
   }
   rank(hs);
   return hs;
@@ -286,8 +287,8 @@ int choose(const DiagnoseResult& r, double min_gain) {
     const auto& g = r.hypotheses[j];
     if (g.effects.size() != 1) continue;
     if (g.effects[0].effect == Effect::kDrift) drift_immaterial = immaterial_drift(g, r.problem);
-    if (g.effects[0].effect == h.effects[0].effect && g.score >= min_gain)
-      single = static_cast<int>(j);
+    if (single < 0 && g.effects[0].effect == h.effects[0].effect && g.score >= min_gain)
+      single = static_cast<int>(j);  // ranked: the effect's best place
   }
   return drift_immaterial && single >= 0 ? single : i;
 }
@@ -325,6 +326,26 @@ ModelOutput locate_baseline(Problem& pr, DiagnoseResult& r) {
   r.validation_fit_before_pct = weighted_fit_pct(pr.y, base.yhat, pr.val_weight);
   r.location = locate(pr, base.yhat);
   return base;
+}
+
+// When the verdict reports an effect alone although its pair with the (immaterial) drift
+// ranks higher, the pair's estimate of the effect, fitted with the wander modelled, is kept
+// if it scores at least as well alone: the single's own fit lets the wander bend it.
+void keep_pair_estimate(DiagnoseResult& r, const Eigen::VectorXd& base, const DiagnoseOptions& o) {
+  HypothesisFit& h = r.hypotheses[static_cast<std::size_t>(r.chosen_index)];
+  if (h.effects.size() != 1) return;
+  for (const auto& g : r.hypotheses) {
+    if (&g == &h) return;  // ranked below the chosen: no pair above it
+    if (g.effects.size() == 2 && g.effects[1].effect == Effect::kDrift &&
+        g.effects[0].effect == h.effects[0].effect && g.effects[0].place == h.effects[0].place) {
+      HypothesisFit alone = score_hypothesis(r.problem, {g.effects[0]}, base, o.fit);
+      if (alone.score >= h.score) {
+        alone.evaluations = h.evaluations + 1;
+        h = std::move(alone);
+      }
+      return;
+    }
+  }
 }
 
 }  // namespace
@@ -367,6 +388,15 @@ DiagnoseResult diagnose(const DiagnoseInput& in, const DiagnoseOptions& o) {
     }
   }
   r.chosen_index = choose(r, o.min_gain_pct);
+  // A verdict's parameters come from a full search, also when the procedure chose one the
+  // screen ranked below the refined few.
+  if (r.chosen_index >= 0 && r.chosen()->screened_only) {
+    HypothesisFit& h = r.hypotheses[static_cast<std::size_t>(r.chosen_index)];
+    const int screened = h.evaluations;
+    h = fit_hypothesis(pr, {h.effects}, base.yhat, o.fit);
+    h.evaluations += screened;
+  }
+  if (r.chosen_index >= 0) keep_pair_estimate(r, base.yhat, o);
   // A disturbance alone that no hypothesis makes worth its parameters is not material.
   if (!r.location.input_mismatch && (!r.location.disturbance || !r.chosen())) {
     r.verdict = "none";
