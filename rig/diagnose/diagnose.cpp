@@ -133,10 +133,12 @@ bool has_input_side(const HypothesisFit& h) {
   });
 }
 
-// Every effect of h that needs the direction test's evidence has it (thresholds.hpp).
+// Every effect of h that needs the direction test's evidence has it (thresholds.hpp). The
+// test regresses on the input's direction of motion: it says nothing of a loop in an output
+// feedback (a hysteretic spring follows the output's motion), which is exempt.
 bool direction_evidenced(const HypothesisFit& h, const Location& loc) {
   return std::none_of(h.effects.begin(), h.effects.end(), [&](const AppliedEffect& e) {
-    return effect_model(e.effect).needs_direction_evidence &&
+    return effect_model(e.effect).needs_direction_evidence && e.place != Place::kFeedback &&
            std::abs(loc.amp.direction_z) < kDirectionEvidenceZ;
   });
 }

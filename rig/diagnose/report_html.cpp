@@ -202,7 +202,14 @@ void write_report_html(const DiagnoseResult& r, const ReportContext& c,
   const report::Tone tone = r.verdict == "none"          ? report::Tone::kOk
                             : r.verdict == "unexplained" ? report::Tone::kWarning
                                                          : report::Tone::kInfo;
-  page.note(tone, "Verdict: " + r.verdict);
+  std::string where;  // the place of the verdict's effect, when not on the input
+  if (const HypothesisFit* h = r.chosen())
+    for (const auto& e : h->effects)
+      if (to_string(e.effect) == r.verdict && e.place != Place::kInput)
+        where = e.place == Place::kInLoop   ? " (inside the loop)"
+                : e.place == Place::kOutput ? " (at the output)"
+                                            : " (in an output feedback)";
+  page.note(tone, "Verdict: " + r.verdict + where);
   page.paragraph(r.explanation);
   const auto& loc = r.location;
   page.key_values(
