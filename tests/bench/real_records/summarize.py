@@ -13,7 +13,7 @@ def effstr(h):
         p = ', '.join(f'{k} {v:.4g}' if isinstance(v, (int, float)) else f'{k} {v}' for k, v in e.get('params', {}).items())
         parts.append(f"{e['effect']}@{e.get('place','?')} ({p})")
     return ' + '.join(parts)
-for name in sorted(os.listdir(OUT)):
+for name in sorted(n for n in os.listdir(OUT) if os.path.isdir(os.path.join(OUT, n))):
     w = os.path.join(OUT, name)
     print(f'\n### {name}')
     used = open(f'{w}/id_used.txt').read().strip() if os.path.exists(f'{w}/id_used.txt') else 'hand-written model.json'
