@@ -28,6 +28,7 @@
 #include "rig/io/out_dir.hpp"
 #include "rig/io/recording.hpp"
 #include "rig/model/model_file.hpp"
+#include "rig/report/html_report.hpp"
 #include "rig/report/json_out.hpp"
 #include "rig/session/emulator.hpp"
 #include "rig/signal/ac_coupling.hpp"
@@ -170,6 +171,7 @@ int run_diagnose(const DiagnoseArgs& a) {
   nlohmann::json doc = diagnose::report_json(r, ctx);
   doc["model_alignment_s"] = alignment_s;
   std::vector<std::string> plant_lines;
+  PlantPage plant_page;
   if (plant) {
     const PlantOutputInput pi{*plant,
                               *tmp,
@@ -182,10 +184,12 @@ int run_diagnose(const DiagnoseArgs& a) {
                               a.out,
                               a.recording.string(),
                               !a.no_plant_check};
-    doc.update(write_plant_outputs(pi, &plant_lines));
+    doc.update(write_plant_outputs(pi, &plant_lines, &plant_page));
   }
   report::write_json_file(a.out / "report.json", doc);
-  diagnose::write_report_html(r, ctx, a.out / "report.html");
+  diagnose::write_report_html(r, ctx, a.out / "report.html", [&](report::HtmlReport& html) {
+    if (plant) plant_section(html, plant_page);
+  });
   model::write_model(a.out / "augmented_model.json", diagnose::augmented_model(r, model));
   if (a.json) {
     fmt::print("{}\n", doc.dump(2));

@@ -18,6 +18,10 @@
 #include "rig/model/model_file.hpp"
 #include "rig/model/transfer_function.hpp"
 
+namespace rig::report {
+class HtmlReport;
+}  // namespace rig::report
+
 namespace rig::cli {
 
 // Exit status and combined stdout+stderr of a finished process.
@@ -99,9 +103,25 @@ struct PlantOutputInput {
   bool plant_check = true;
 };
 
+// What report.html shows of the plant outputs (its "Plant" section).
+struct PlantPage {
+  std::string toml, augmented;  // the plant as given, the augmented plant written
+  PlantMapping mapping;
+  std::optional<double> fit_before_pct, fit_after_pct;  // the plant check, when replayed
+  std::string check_error;
+  Eigen::VectorXd y, before, after;  // recorded output and the two replays
+  double dt_s = 0.01;
+  Eigen::Index warmup = 0;
+};
+
 // Writes out_dir/augmented_plant.toml and, with plant_check, out_dir/plant_check.csv
 // (t, u, y, the replayed plant before and after); returns the report.json keys
-// `plant_model` and `plant_check` and appends summary lines.
-nlohmann::json write_plant_outputs(const PlantOutputInput& in, std::vector<std::string>* summary);
+// `plant_model` and `plant_check`, appends summary lines and fills page.
+nlohmann::json write_plant_outputs(const PlantOutputInput& in, std::vector<std::string>* summary,
+                                   PlantPage* page);
+
+// report.html's "Plant" section: the parameters written back, the notes of the mapping, and
+// the plant check's replays against the recording.
+void plant_section(report::HtmlReport& html, const PlantPage& page);
 
 }  // namespace rig::cli

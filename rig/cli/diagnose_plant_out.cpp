@@ -45,13 +45,17 @@ Eigen::VectorXd replay(const PlantOutputInput& in, const std::filesystem::path& 
 
 // Replays both plants; the `plant_check` object (or its error) and the summary line.
 json plant_check(const PlantOutputInput& in, const std::filesystem::path& augmented, bool changed,
-                 std::vector<std::string>* summary) {
+                 std::vector<std::string>* summary, PlantPage* page) {
   const Eigen::Index from = in.result.warmup;
   try {
     const Eigen::VectorXd before = replay(in, in.plant.toml);
     const Eigen::VectorXd after = changed ? replay(in, augmented) : before;
     const double fb = fit_after_warmup_pct(in.y, before, from);
     const double fa = fit_after_warmup_pct(in.y, after, from);
+    page->fit_before_pct = fb;
+    page->fit_after_pct = fa;
+    page->before = before;
+    page->after = after;
     std::ofstream csv(in.out_dir / "plant_check.csv");
     csv << "t,u,y,y_plant,y_augmented_plant\n";
     for (Eigen::Index k = 0; k < in.u.size(); ++k)
@@ -67,6 +71,7 @@ json plant_check(const PlantOutputInput& in, const std::filesystem::path& augmen
             {"samples", in.u.size() - from},
             {"file", "plant_check.csv"}};
   } catch (const std::exception& e) {
+    page->check_error = e.what();
     summary->push_back(fmt::format("plant check failed: {}", e.what()));
     return {{"error", e.what()}};
   }
@@ -74,7 +79,8 @@ json plant_check(const PlantOutputInput& in, const std::filesystem::path& augmen
 
 }  // namespace
 
-json write_plant_outputs(const PlantOutputInput& in, std::vector<std::string>* summary) {
+json write_plant_outputs(const PlantOutputInput& in, std::vector<std::string>* summary,
+                         PlantPage* page) {
   const diagnose::HypothesisFit* chosen = in.result.chosen();
   PlantMapping mapping;
   if (chosen) mapping = plant_changes(*chosen, in.plant, in.baseline, in.u);
@@ -104,9 +110,15 @@ json write_plant_outputs(const PlantOutputInput& in, std::vector<std::string>* s
                         {"augmented_plant", "augmented_plant.toml"},
                         {"changes", changes_json(mapping)},
                         {"notes", mapping.notes}};
+  page->toml = in.plant.toml.string();
+  page->augmented = augmented.string();
+  page->y = in.y;
+  page->dt_s = in.dt_s;
+  page->warmup = in.result.warmup;
   out["plant_check"] = in.plant_check
-                           ? plant_check(in, augmented, !mapping.changes.empty(), summary)
+                           ? plant_check(in, augmented, !mapping.changes.empty(), summary, page)
                            : json(nullptr);
+  page->mapping = std::move(mapping);
   return out;
 }
 

@@ -94,6 +94,10 @@ struct EffectModel {
   // depend on the input's direction of motion (a play or a hysteresis loop does; with a
   // fitted place and shares it could otherwise stand in for a deadband or a gain).
   bool needs_direction_evidence = false;
+  // Whether a fitted value can be a verdict (nullptr: any can): one whose shape parameter
+  // stopped at its bound is the search's best stand-in for some other shape, not an estimate
+  // (a resonance at its largest damping ratio is a broad reshaping of the band).
+  bool (*credible)(const AppliedEffect& effect) = nullptr;
 };
 
 // Throws std::out_of_range for a value outside the enum.

@@ -28,7 +28,7 @@ struct HypothesisFit {
   std::vector<std::pair<std::string, double>> derived;
   int evaluations = 0;
   bool screened_only = false;  // searched by the screen alone (diagnose.cpp), not in full
-  Eigen::VectorXd yhat;  // the augmented model's output over the whole record
+  Eigen::VectorXd yhat;        // the augmented model's output over the whole record
   model::TransferFunction tf;
   Eigen::Index active_from = 0, active_to = -1;  // span the effect acts on (-1: to the end)
 

@@ -54,6 +54,9 @@ struct AmplitudeLocation {
   LevelBin positive, negative;     // u >= 0 / u < 0
   LevelBin rising, falling;        // gain field: +-coefficient of G sign(du/dt)
   double level_chi2 = 0.0, sign_z = 0.0, direction_z = 0.0;
+  // r on the baseline's response to the output's direction of motion sign(dz/dt): a
+  // hysteretic restoring force fed back from the output (placement.hpp, feedback).
+  double output_direction_z = 0.0;
   // The model output's own level: r regressed on yhat restricted to each fifth of its signed
   // level (a static map that bends or stops at the output, a tank that overflows), chi^2
   // against one common gain. Reported, not part of the decision: it fired (33.7 against
@@ -81,6 +84,7 @@ struct Location {
   ResidualTests tests;
   Disturbances dist;
   bool input_mismatch = false;  // frequency, cross-correlation or amplitude test failed
+  bool behind_drift = false;    // ... only once the drift was taken out of the residual
   bool disturbance = false;
 };
 

@@ -176,6 +176,34 @@ double output_level_chi2(const Eigen::VectorXd& yh, const Eigen::VectorXd& r, do
   return (one.rss - full.rss) / std::max(s2, 1e-300);
 }
 
+// The sign of each sample's change (0 at the first).
+Eigen::VectorXd direction_of(const Eigen::VectorXd& x) {
+  Eigen::VectorXd d = Eigen::VectorXd::Zero(x.size());
+  for (Eigen::Index k = 1; k < x.size(); ++k)
+    d(k) = x(k) > x(k - 1) ? 1.0 : (x(k) < x(k - 1) ? -1.0 : 0.0);
+  return d;
+}
+
+struct DirectionFit {
+  double beta = 0.0, sd = 1.0, z = 0.0;
+};
+
+// r on [yh, the direction regressor]: the direction's coefficient and its z. (A column of
+// yh's rate beside them, for a lag, would take the evidence of a play inside a loop, whose
+// first effect through the loop is a lag's.)
+DirectionFit direction_fit(const Eigen::VectorXd& yh, const Eigen::VectorXd& direction,
+                           const Eigen::VectorXd& r, double n_eff) {
+  Eigen::MatrixXd x(yh.size(), 2);
+  x.col(0) = yh;
+  x.col(1) = direction;
+  const Ls fit = least_squares(x, r);
+  DirectionFit out;
+  out.beta = fit.beta(1);
+  out.sd = std::sqrt(std::max(1e-300, fit.rss / std::max(1.0, n_eff - 2) * fit.inv(1, 1)));
+  out.z = out.beta / out.sd;
+  return out;
+}
+
 }  // namespace
 
 AmplitudeLocation locate_amplitude(const Problem& pr, const Eigen::VectorXd& r_all,
@@ -237,19 +265,17 @@ AmplitudeLocation locate_amplitude(const Problem& pr, const Eigen::VectorXd& r_a
   // The two gains are strongly (negatively) correlated: the contrast's own variance.
   const double var_diff = s2s * (sign.inv(0, 0) + sign.inv(1, 1) - 2.0 * sign.inv(0, 1));
   a.sign_z = var_diff > 0.0 ? (sign.beta(0) - sign.beta(1)) / std::sqrt(var_diff) : 0.0;
-  // Direction: play or friction adds -b sign(du/dt) before the plant: regressor G(sign(du)).
-  Eigen::VectorXd sdu = Eigen::VectorXd::Zero(n);
-  for (Eigen::Index k = 1; k < n; ++k)
-    sdu(k) = pr.u(k) > pr.u(k - 1) ? 1.0 : (pr.u(k) < pr.u(k - 1) ? -1.0 : 0.0);
-  Eigen::MatrixXd xd(m, 2);
-  xd.col(0) = yh;
-  xd.col(1) = masked_response(pr, sdu).tail(m);
-  const Ls dir = least_squares(xd, r);
-  const double s2d = dir.rss / std::max(1.0, n_eff - 2);
-  const double sd = std::sqrt(std::max(1e-300, s2d * dir.inv(1, 1)));
-  a.direction_z = dir.beta(1) / sd;
-  a.rising = {0.0, dir.beta(1), sd};  // the play: -beta is the half-width in input units
-  a.falling = {0.0, -dir.beta(1), sd};
+  // Direction: play or friction adds -b sign(du/dt) before the plant: regressor G(sign(du)),
+  // beside the model output (what a gain changes).
+  const DirectionFit in =
+      direction_fit(yh, masked_response(pr, direction_of(pr.u)).tail(m), r, n_eff);
+  a.direction_z = in.z;
+  a.rising = {0.0, in.beta, in.sd};  // the play: -beta is the half-width in input units
+  a.falling = {0.0, -in.beta, in.sd};
+  // The output's direction: a hysteretic restoring force fed back from the output adds
+  // -b sign(dz/dt) at the input: regressor G(sign(dz)).
+  a.output_direction_z =
+      direction_fit(yh, masked_response(pr, direction_of(yh_all)).tail(m), r, n_eff).z;
   a.output_level_chi2 = output_level_chi2(yh, r, n_eff, nb);
   a.output_level_dependent = a.output_level_chi2 > kLevelChi2Bound;
   const double spread = a.by_level.back().gain - a.by_level.front().gain;

@@ -90,4 +90,9 @@ std::vector<std::vector<AppliedEffect>> placed_starts(Effect effect, Place place
   return out;
 }
 
+bool place_credible(const AppliedEffect& e) {
+  return e.place != Place::kInLoop || e.place_params.empty() ||
+         e.place_params[0] < thresholds::kFrontLagAtBound * thresholds::kFrontLagMaxS;
+}
+
 }  // namespace rig::diagnose

@@ -44,6 +44,11 @@ model::TransferFunction rest_after_front(const model::TransferFunction& tf, doub
 // seeds, which come from the input's scales).
 Problem problem_at(const Problem& problem, Place place, double front_lag_s);
 
+// Whether a fitted place can be part of a verdict: a front lag stopped at its upper bound
+// (thresholds.hpp kFrontLagMaxS) is the search reaching for a signal the excitation hardly
+// moves, a stand-in for some other shape, not a place in the loop.
+bool place_credible(const AppliedEffect& effect);
+
 // Starting points of one effect at one place (the effect's seeds at that place's scales,
 // for a few front lags in the loop).
 std::vector<std::vector<AppliedEffect>> placed_starts(Effect effect, Place place,

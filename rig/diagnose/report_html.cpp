@@ -197,7 +197,8 @@ report::Table hypotheses_table(const DiagnoseResult& r) {
 }  // namespace
 
 void write_report_html(const DiagnoseResult& r, const ReportContext& c,
-                       const std::filesystem::path& file) {
+                       const std::filesystem::path& file,
+                       const std::function<void(report::HtmlReport&)>& more) {
   report::HtmlReport page("rig diagnose: " + c.recording + " vs " + c.model);
   const report::Tone tone = r.verdict == "none"          ? report::Tone::kOk
                             : r.verdict == "unexplained" ? report::Tone::kWarning
@@ -227,6 +228,7 @@ void write_report_html(const DiagnoseResult& r, const ReportContext& c,
        {"split", fmt::format("{} interleaved blocks after {:.1f} s warm-up", r.blocks,
                              static_cast<double>(r.warmup) * r.problem.dt_s)},
        {"run time", fmt::format("{:.2f} s", r.elapsed_s)}});
+  if (more) more(page);  // what the verdict changed (the plant), before the evidence
   page.section("Time").chart(time_chart(r));
   auto [psd, coh] = spectrum_charts(r);
   page.section("Where in frequency").chart(psd).chart(coh);

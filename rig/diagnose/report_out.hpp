@@ -4,11 +4,16 @@
 #pragma once
 
 #include <filesystem>
+#include <functional>
 #include <nlohmann/json.hpp>
 #include <string>
 
 #include "rig/diagnose/diagnose.hpp"
 #include "rig/model/model_file.hpp"
+
+namespace rig::report {
+class HtmlReport;
+}  // namespace rig::report
 
 namespace rig::diagnose {
 
@@ -25,7 +30,9 @@ nlohmann::json report_json(const DiagnoseResult& result, const ReportContext& co
 // hypothesis the baseline is returned with "augmentation": [].
 model::ModelFile augmented_model(const DiagnoseResult& result, const model::ModelFile& baseline);
 
+// `more` adds sections after the verdict's key values (the plant outputs of a plant TOML).
 void write_report_html(const DiagnoseResult& result, const ReportContext& context,
-                       const std::filesystem::path& file);
+                       const std::filesystem::path& file,
+                       const std::function<void(report::HtmlReport&)>& more = {});
 
 }  // namespace rig::diagnose

@@ -55,6 +55,9 @@ inline constexpr int kScreenMaxDecimation = 4;
 // --- Pairs (diagnose.cpp) ---
 // Only the best input-side singles are paired with each other (every pair is a full fit).
 inline constexpr std::size_t kPairedInputSingles = 3;
+// The best input-side single is also paired with every other input-side effect (at its best
+// place): these pairs are screened as the singles are, and this many of them refined.
+inline constexpr std::size_t kRefinedForwardPairs = 3;
 // Of those, the best this many are also paired with each detected disturbance.
 inline constexpr std::size_t kPairedWithDisturbance = 2;
 // A disturbance whose single scores this much dominates the residual: the input-side
@@ -123,6 +126,9 @@ inline constexpr double kLevelShiftOfOutputStd = 0.5;
 // a signal the excitation hardly moves.
 inline constexpr double kFrontLagMinS = 0.005;
 inline constexpr double kFrontLagMaxS = 2.0;
+// A fitted front lag at this fraction of kFrontLagMaxS or more stopped at the bound
+// (placement.hpp place_credible).
+inline constexpr double kFrontLagAtBound = 0.98;
 // Its starting points: an actuator (50 ms) and a governor's filtered output (300 ms).
 inline constexpr double kFrontLagSeedsS[] = {0.05, 0.3};
 // The feedback place's gain c: the output's nonlinear part fed back, as a share of the

@@ -21,6 +21,17 @@ constexpr double kMaxModeDamping = 0.4;
 // hf_gain below this reads as a mode in series (the model's own gain rolls off above it).
 constexpr double kSeriesModeBelow = 0.5;
 
+// A peak or notch whose fitted damping ratio is this close to kMaxModeDamping stopped at
+// the bound: the data asked for a broader shape than a mode (a lag or an in-loop effect seen
+// through the loop), and the fit is no evidence of a mode at its frequency. A mode in series
+// at or above the band's edge is exempt: only its low-frequency flank is seen, which fixes
+// its frequency and leaves its damping free.
+constexpr double kAtDampingBound = 0.98 * kMaxModeDamping;
+
+bool credible(const AppliedEffect& e) {
+  return e.params[1] < kAtDampingBound || e.params[3] < kSeriesModeBelow;
+}
+
 std::vector<ParamSpec> specs(const DataScales& s) {
   return {{"freq_hz", std::max(4.0 / s.duration_s, 1e-3), 0.45 / s.dt_s, true},
           {"zeta", 0.005, kMaxModeDamping, true},
@@ -72,6 +83,9 @@ const EffectModel kResonanceEffect{
     .seeds = seeds,
     .apply_linear = apply,
     .explain = meaning,
+    // At the model's own mode with hf_gain 1 it is a change of that mode's damping.
+    .generalises = Effect::kLoadDamping,
+    .credible = credible,
 };
 
 }  // namespace rig::diagnose

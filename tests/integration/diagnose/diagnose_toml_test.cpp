@@ -2,6 +2,7 @@
 // beside it): a recording of the emulated plant (plantsim in-process, CVODE) with one
 // parameter changed, diagnosed against the unchanged preset TOML. Checks the verdict, the
 // augmented plant TOML (the right key, within 20 % of the truth) and the plant check.
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 #include <toml++/toml.h>
 #include <unistd.h>
@@ -11,6 +12,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
@@ -107,6 +109,13 @@ TEST_F(DiagnoseToml, LongerFuelDeadTimeGoesBackIntoThePlant) {
   const double before = j["plant_check"]["fit_before_pct"];
   const double after = j["plant_check"]["fit_after_pct"];
   EXPECT_GT(after, before + 5.0);
+  // report.html shows what went back into the plant and the replays.
+  std::ifstream page(dir_ / "out" / "report.html");
+  const std::string html((std::istreambuf_iterator<char>(page)), std::istreambuf_iterator<char>());
+  EXPECT_NE(html.find("<h2>Plant</h2>"), std::string::npos);
+  EXPECT_NE(html.find("engine.dead_time_s"), std::string::npos);
+  EXPECT_NE(html.find(fmt::format("fit {:.1f} % -&gt; {:.1f} %", before, after)), std::string::npos);
+  EXPECT_NE(html.find("the plant replayed, as given and augmented"), std::string::npos);
 }
 
 // Transducer gain error 0.9 on a plant file that starts from the preset and overrides a key.

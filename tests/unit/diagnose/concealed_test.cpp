@@ -26,7 +26,10 @@ TEST(Concealed, EveryEffectIsFoundWithItsParameter) {
     const DiagnoseResult r = diagnose(rec.input);
     ++total;
     std::printf("%-60s -> %s\n", rec.description.c_str(), r.verdict.c_str());
-    if (r.verdict != to_string(e)) continue;
+    if (r.verdict != to_string(e)) {
+      std::printf("  direction z %.2f: %s\n", r.location.amp.direction_z, r.explanation.c_str());
+      continue;
+    }
     ++correct;
     const HypothesisFit* h = r.chosen();
     ASSERT_NE(h, nullptr);

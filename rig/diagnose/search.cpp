@@ -1,0 +1,284 @@
+#include "rig/diagnose/search.hpp"
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <numbers>
+#include <thread>
+#include <type_traits>
+
+#include "rig/diagnose/effect_registry.hpp"
+#include "rig/diagnose/placement.hpp"
+#include "rig/diagnose/split.hpp"
+#include "rig/diagnose/verdict.hpp"
+
+namespace rig::diagnose {
+namespace {
+
+using thresholds::kDominantDisturbanceGainPct;
+using thresholds::kPairedInputSingles;
+using thresholds::kPairedWithDisturbance;
+using thresholds::kRefinedForwardPairs;
+using thresholds::kRefinedSingles;
+using thresholds::kScreenEvaluations;
+using thresholds::kScreenMaxDecimation;
+using thresholds::kScreenMinSamples;
+using thresholds::kScreenOversampling;
+
+using Candidate = std::vector<std::vector<AppliedEffect>>;  // starting points of one hypothesis
+
+void rank(std::vector<HypothesisFit>& hs) {
+  std::stable_sort(hs.begin(), hs.end(), [](const HypothesisFit& a, const HypothesisFit& b) {
+    return a.score > b.score;
+  });
+}
+
+// One effect's hypotheses: an input-side nonlinearity at each place it can sit
+// (placement.hpp), any other effect once.
+std::vector<Candidate> singles(Effect e, const Problem& pr, const Location& loc) {
+  if (kind_of(e) != EffectKind::kInputNonlinearity)
+    return {placed_starts(e, Place::kInput, pr, loc)};
+  std::vector<Candidate> out;
+  for (Place place : kAllPlaces) {
+    if (place == Place::kInLoop && !in_loop_possible(pr.tf)) continue;
+    if (place == Place::kFeedback && !effect_model(e).in_feedback) continue;
+    out.push_back(placed_starts(e, place, pr, loc));
+  }
+  return out;
+}
+
+std::vector<HypothesisFit> fit_all(const Problem& pr, const std::vector<Candidate>& cands,
+                                   const Eigen::VectorXd& base, const DiagnoseOptions& o) {
+  std::vector<HypothesisFit> out(cands.size());
+  std::atomic<std::size_t> next{0};
+  auto work = [&] {
+    for (std::size_t i = next++; i < cands.size(); i = next++)
+      out[i] = fit_hypothesis(pr, cands[i], base, o.fit);
+  };
+  std::vector<std::thread> pool;
+  for (int t = 1; t < std::max(1, o.threads); ++t) pool.emplace_back(work);
+  work();
+  for (auto& t : pool) t.join();
+  return out;
+}
+
+// The screen's decimation: keep kScreenOversampling samples per period of the highest
+// excited frequency, at most kScreenMaxDecimation, none for a short record.
+int screen_decimation(const Problem& pr) {
+  if (pr.u.size() < kScreenMinSamples) return 1;
+  double band_hz = 0.0;  // the input's band: its rate over its rms, as a frequency
+  band_hz = pr.scales.u_rate_std / (2.0 * std::numbers::pi * std::max(pr.scales.u_std, 1e-300));
+  const int f =
+      static_cast<int>(std::floor(1.0 / (pr.dt_s * kScreenOversampling * std::max(band_hz, 1e-9))));
+  return std::clamp(f, 1, kScreenMaxDecimation);
+}
+
+// Every f-th sample of the problem (the input and output as recorded, the weights and
+// spans with them), its derived fields rebuilt.
+Problem decimated(const Problem& pr, int f) {
+  if (f <= 1) return pr;
+  Problem out = pr;
+  const Eigen::Index n = (pr.u.size() + f - 1) / f;
+  auto pick = [&](const auto& x) {
+    std::decay_t<decltype(x)> y(n);
+    for (Eigen::Index i = 0; i < n; ++i) y(i) = x(i * f);
+    return y;
+  };
+  out.u = pick(pr.u);
+  out.y = pick(pr.y);
+  out.est_weight = pick(pr.est_weight);
+  out.val_weight = pick(pr.val_weight);
+  out.dt_s = pr.dt_s * f;
+  out.active_from = pr.active_from / f;
+  out.active_to = pr.active_to < 0 ? -1 : (pr.active_to + f - 1) / f;
+  out.level_shift_at = pr.level_shift_at < 0 ? -1 : pr.level_shift_at / f;
+  finish_problem(out);
+  return out;
+}
+
+// Every single hypothesis is fitted with a short search (a screen), and the best few are
+// then searched in full from where the screen stopped (thresholds.hpp).
+std::vector<HypothesisFit> screen_and_refine(const Problem& pr, const std::vector<Candidate>& cands,
+                                             const Eigen::VectorXd& base, const DiagnoseOptions& o,
+                                             std::size_t refine = kRefinedSingles) {
+  DiagnoseOptions screen = o;
+  screen.fit.max_evaluations = std::min(o.fit.max_evaluations, kScreenEvaluations);
+  const Problem coarse = decimated(pr, screen_decimation(pr));
+  std::vector<HypothesisFit> hs = fit_all(coarse, cands, model_output(coarse, {}).yhat, screen);
+  rank(hs);
+  const std::size_t k = std::min(hs.size(), refine);
+  std::vector<Candidate> best;
+  for (std::size_t i = 0; i < k; ++i) best.push_back({hs[i].effects});
+  std::vector<HypothesisFit> refined = fit_all(pr, best, base, o);
+  for (std::size_t i = 0; i < hs.size(); ++i) {
+    const int screened = hs[i].evaluations;
+    hs[i] = i < k ? std::move(refined[i]) : score_hypothesis(pr, hs[i].effects, base, o.fit);
+    hs[i].evaluations += screened;
+    hs[i].screened_only = i >= k;
+  }
+  rank(hs);
+  return hs;
+}
+
+bool gated(const Problem& pr, const HypothesisFit& h) {
+  return h.active_from != pr.active_from ||
+         (h.active_to < 0 ? pr.y.size() : h.active_to) != pr.active_to;
+}
+
+bool same_effects(const HypothesisFit& a, const HypothesisFit& b) {
+  return a.effects.size() == b.effects.size() &&
+         std::equal(a.effects.begin(), a.effects.end(), b.effects.begin(),
+                    [](const AppliedEffect& x, const AppliedEffect& y) {
+                      return x.effect == y.effect && x.place == y.place;
+                    });
+}
+
+// When an onset was found for one of the best hypotheses (onset.cpp), every input-side
+// hypothesis is searched again on that span, so that all compete on the same footing: the
+// onset search refits only the few best, ranked on the whole record, where an effect present
+// in half of it is matched as well by a lag or a gain as by its own form.
+void research_at_onset(const Problem& pr, const std::vector<Candidate>& cands,
+                       std::vector<HypothesisFit>& hs, const Eigen::VectorXd& base,
+                       const DiagnoseOptions& o) {
+  const auto onset = std::find_if(hs.begin(), hs.end(), [&](const HypothesisFit& h) {
+    return has_input_side(h) && gated(pr, h);
+  });
+  if (onset == hs.end()) return;
+  const Problem at = spanned(pr, *onset);
+  std::vector<Candidate> inputs;
+  for (const auto& c : cands)
+    if (kind_of(c.front().front().effect) != EffectKind::kDisturbance) inputs.push_back(c);
+  for (auto& g : screen_and_refine(at, inputs, base, o)) {
+    auto h = std::find_if(hs.begin(), hs.end(),
+                          [&](const HypothesisFit& x) { return same_effects(x, g); });
+    if (h == hs.end()) continue;
+    const int evaluations = h->evaluations;
+    if (g.score > h->score) *h = std::move(g);
+    h->evaluations += evaluations;
+  }
+  rank(hs);
+}
+
+std::vector<Effect> applicable(const Problem& pr, const Location& loc, const DiagnoseOptions& o) {
+  std::vector<Effect> out;
+  const auto& pool =
+      o.effects.empty() ? std::vector<Effect>(kAllEffects.begin(), kAllEffects.end()) : o.effects;
+  for (Effect e : pool) {
+    if (e == Effect::kSensorLag) continue;  // the twin of extra_lag, told apart afterwards
+    if (e == Effect::kLoadDamping && !dominant_mode(pr.tf)) continue;
+    if (e == Effect::kPeriodicDisturbance && !loc.dist.periodic) continue;
+    if (e == Effect::kDrift && !loc.dist.drift) continue;
+    if (kind_of(e) != EffectKind::kDisturbance && !loc.input_mismatch) continue;
+    out.push_back(e);
+  }
+  return out;
+}
+
+// Pairs of the best input-side singles (the best place of each effect), and of those with a
+// detected disturbance; every input-side effect with a disturbance that dominates the
+// residual (its single's score, fitted without it, says little then).
+std::vector<Candidate> pair_candidates(const std::vector<HypothesisFit>& singles) {
+  std::vector<const HypothesisFit*> inputs, dists;  // singles are ranked
+  for (const auto& h : singles) {
+    if (!has_input_side(h)) {
+      dists.push_back(&h);
+      continue;
+    }
+    const bool seen = std::any_of(inputs.begin(), inputs.end(), [&](const HypothesisFit* g) {
+      return g->effects[0].effect == h.effects[0].effect;
+    });
+    if (!seen) inputs.push_back(&h);
+  }
+  const bool dominant = !dists.empty() && dists.front()->score >= kDominantDisturbanceGainPct;
+  const auto lag = [](Effect e) { return e == Effect::kExtraLag || e == Effect::kSensorLag; };
+  std::vector<Candidate> out;
+  for (std::size_t i = 0; i < inputs.size(); ++i) {
+    const AppliedEffect& a = inputs[i]->effects[0];
+    for (std::size_t j = i + 1; j < std::min(inputs.size(), kPairedInputSingles); ++j) {
+      const AppliedEffect& b = inputs[j]->effects[0];
+      if (i >= kPairedInputSingles || (lag(a.effect) && lag(b.effect))) continue;  // twins
+      if (a.place == b.place && (a.place == Place::kInLoop || a.place == Place::kFeedback))
+        continue;  // one front lag, one feedback path
+      out.push_back({{a, b}});
+    }
+    for (std::size_t j = 0; j < dists.size(); ++j)
+      if ((i < kPairedWithDisturbance) || (dominant && j == 0))
+        out.push_back({{a, dists[j]->effects[0]}});
+  }
+  return out;
+}
+
+// A forward step from the best input-side single that could be a verdict, and from the best
+// linear one (a nonlinearity in the loop can stand in for a lag, and the lag's pair with a
+// gain is then never formed): each with every other input-side effect at its best place,
+// but for the pairs already among `existing`.
+std::vector<Candidate> forward_pairs(const std::vector<HypothesisFit>& singles,
+                                     const std::vector<Candidate>& existing, const Location& loc) {
+  const auto lag = [](Effect e) { return e == Effect::kExtraLag || e == Effect::kSensorLag; };
+  const auto same = [](const AppliedEffect& x, const AppliedEffect& y) {
+    return x.effect == y.effect && x.place == y.place;
+  };
+  const auto fitted = [&](const std::vector<Candidate>& cs, const AppliedEffect& a,
+                          const AppliedEffect& b) {
+    return std::any_of(cs.begin(), cs.end(), [&](const Candidate& c) {
+      const auto& p = c.front();
+      return p.size() == 2 &&
+             ((same(p[0], a) && same(p[1], b)) || (same(p[0], b) && same(p[1], a)));
+    });
+  };
+  std::vector<Candidate> out;
+  for (const bool linear : {false, true}) {
+    const auto first = std::find_if(singles.begin(), singles.end(), [&](const HypothesisFit& h) {
+      return h.effects.size() == 1 && has_input_side(h) && could_be_verdict(h, loc) &&
+             (!linear || !has_nonlinearity(h));
+    });
+    if (first == singles.end()) continue;
+    const AppliedEffect& a = first->effects[0];
+    std::vector<Effect> seen{a.effect};
+    for (const auto& h : singles) {
+      if (h.effects.size() != 1 || !has_input_side(h)) continue;
+      const AppliedEffect& b = h.effects[0];
+      if (std::find(seen.begin(), seen.end(), b.effect) != seen.end()) continue;
+      seen.push_back(b.effect);
+      if ((lag(a.effect) && lag(b.effect)) ||
+          (a.place == b.place && (a.place == Place::kInLoop || a.place == Place::kFeedback)))
+        continue;
+      if (!fitted(existing, a, b) && !fitted(out, a, b)) out.push_back({{a, b}});
+    }
+  }
+  return out;
+}
+
+}  // namespace
+
+// The problem with the effects acting on h's span only (an onset found for h).
+Problem spanned(const Problem& pr, const HypothesisFit& h) {
+  Problem out = pr;
+  out.active_from = h.active_from;
+  out.active_to = h.active_to < 0 ? pr.y.size() : h.active_to;
+  return out;
+}
+
+std::vector<HypothesisFit> search_hypotheses(const Problem& pr, const Location& loc,
+                                             const Eigen::VectorXd& base,
+                                             const DiagnoseOptions& o) {
+  std::vector<Candidate> cands;
+  for (Effect e : applicable(pr, loc, o))
+    for (auto& c : singles(e, pr, loc)) cands.push_back(std::move(c));
+  std::vector<HypothesisFit> hs = screen_and_refine(pr, cands, base, o);
+  refine_onsets(pr, hs, base, o.fit);
+  research_at_onset(pr, cands, hs, base, o);
+  add_sensor_lag_twin(pr, hs, o.fit);
+  rank(hs);
+  if (!o.try_pairs || hs.empty() || explains(pr, hs.front(), loc)) return hs;
+  const std::vector<Candidate> paired = pair_candidates(hs);
+  std::vector<HypothesisFit> pairs = fit_all(pr, paired, base, o);
+  for (auto& h :
+       screen_and_refine(pr, forward_pairs(hs, paired, loc), base, o, kRefinedForwardPairs))
+    pairs.push_back(std::move(h));
+  for (auto& h : pairs) hs.push_back(std::move(h));
+  rank(hs);
+  return hs;
+}
+
+}  // namespace rig::diagnose

@@ -1,0 +1,173 @@
+#include "rig/diagnose/verdict.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "rig/diagnose/effect_registry.hpp"
+#include "rig/diagnose/placement.hpp"
+
+namespace rig::diagnose {
+namespace {
+
+using thresholds::kDirectionEvidenceZ;
+using thresholds::kDriftMaterialFraction;
+using thresholds::kDriftMaterialGainPct;
+using thresholds::kDriftMaterialOfLevel;
+using thresholds::kNestedMarginPct;
+using thresholds::kNonlinearOverLinearPct;
+using thresholds::kOperatingLevelStds;
+
+// Every effect of h that needs the direction test's evidence has it (thresholds.hpp): on
+// the input's direction of motion, or for a loop in an output feedback (a hysteretic spring
+// follows the output's motion) on the output's.
+bool direction_evidenced(const HypothesisFit& h, const Location& loc) {
+  return std::none_of(h.effects.begin(), h.effects.end(), [&](const AppliedEffect& e) {
+    const double z = e.place == Place::kFeedback ? loc.amp.output_direction_z : loc.amp.direction_z;
+    return effect_model(e.effect).needs_direction_evidence && std::abs(z) < kDirectionEvidenceZ;
+  });
+}
+
+// Every effect's fitted value and place can be a verdict (EffectModel::credible,
+// place_credible): none stopped at a bound as a stand-in for another shape.
+bool credible(const HypothesisFit& h) {
+  return std::all_of(h.effects.begin(), h.effects.end(), [](const AppliedEffect& e) {
+    const auto check = effect_model(e.effect).credible;
+    return (!check || check(e)) && place_credible(e);
+  });
+}
+
+// A pair of two input-side effects contains each of them alone: it must beat the better by
+// the nested margin (thresholds.hpp), or the second effect has bought only fitting noise.
+bool pair_adds(const std::vector<HypothesisFit>& hs, const HypothesisFit& h) {
+  if (h.effects.size() != 2 || std::any_of(h.effects.begin(), h.effects.end(), [](const auto& e) {
+        return kind_of(e.effect) == EffectKind::kDisturbance;
+      }))
+    return true;
+  double best = -1e300;
+  for (const auto& g : hs)
+    if (g.effects.size() == 1)
+      for (const auto& e : h.effects)
+        if (g.effects[0].effect == e.effect && g.effects[0].place == e.place)
+          best = std::max(best, g.score);
+  return h.score - best >= kNestedMarginPct;
+}
+
+// The score of the same hypothesis without its input-side effects (0 when it has no
+// disturbance): what a pair's input-side half must add to.
+double disturbance_part_score(const std::vector<HypothesisFit>& hs, const HypothesisFit& h) {
+  double best = 0.0;
+  for (const auto& e : h.effects) {
+    if (kind_of(e.effect) != EffectKind::kDisturbance) continue;
+    for (const auto& g : hs)
+      if (g.effects.size() == 1 && g.effects[0].effect == e.effect) best = std::max(best, g.score);
+  }
+  return best;
+}
+
+// A drift alone is material when it is large against the input-driven response or the
+// operating level, or when modelling it raises the validation fit enough (thresholds.hpp).
+bool immaterial_drift(const HypothesisFit& h, const Problem& pr) {
+  if (h.effects.size() != 1 || h.effects[0].effect != Effect::kDrift) return false;
+  double rms = 0.0;
+  for (const auto& [name, value] : h.derived)
+    if (name == "drift_rms") rms = value;
+  const double y_std = std::sqrt(pr.y.squaredNorm() / std::max<double>(1.0, pr.y.size()));
+  const double level = std::abs(pr.y_level);
+  if (level > kOperatingLevelStds * y_std && rms < kDriftMaterialOfLevel * level) return true;
+  if (h.validation_fit_after - h.validation_fit_before >= kDriftMaterialGainPct) return false;
+  return rms < kDriftMaterialFraction * pr.scales.z_std;
+}
+
+// A dead time of at most half a sample alone is the sampling convention (timing.hpp).
+bool sampling_convention_only(const HypothesisFit& h, const Problem& pr) {
+  return h.effects.size() == 1 && h.effects[0].effect == Effect::kDeadTime &&
+         std::abs(h.effects[0].params[0]) <= 0.5 * pr.dt_s;
+}
+
+// The best hypothesis above min_gain; when the input tests failed, one with an input-side
+// effect that adds min_gain to what its disturbance alone explains, unless there is none
+// (then a disturbance alone explains it).
+int choose_raw(const DiagnoseResult& r, double min_gain, bool linear_only = false) {
+  const bool input = r.location.input_mismatch;
+  int best_any = -1;
+  for (std::size_t i = 0; i < r.hypotheses.size(); ++i) {
+    const auto& h = r.hypotheses[i];
+    if (h.score < min_gain) break;
+    if (linear_only && has_nonlinearity(h)) continue;
+    if (!direction_evidenced(h, r.location) || !credible(h) || !pair_adds(r.hypotheses, h))
+      continue;
+    if (immaterial_drift(h, r.problem) || sampling_convention_only(h, r.problem)) continue;
+    if (best_any < 0) best_any = static_cast<int>(i);
+    if (!input) return static_cast<int>(i);
+    if (has_input_side(h) && h.score - disturbance_part_score(r.hypotheses, h) >= min_gain)
+      return static_cast<int>(i);
+  }
+  return best_any;
+}
+
+}  // namespace
+
+bool has_input_side(const HypothesisFit& h) {
+  return std::any_of(h.effects.begin(), h.effects.end(), [](const AppliedEffect& e) {
+    return kind_of(e.effect) != EffectKind::kDisturbance;
+  });
+}
+
+bool has_nonlinearity(const HypothesisFit& h) {
+  return std::any_of(h.effects.begin(), h.effects.end(), [](const AppliedEffect& e) {
+    return kind_of(e.effect) == EffectKind::kInputNonlinearity;
+  });
+}
+
+bool could_be_verdict(const HypothesisFit& h, const Location& loc) {
+  return credible(h) && direction_evidenced(h, loc);
+}
+
+// A pair "effect + drift" whose drift alone is immaterial is reported as the effect alone
+// when that single scores min_gain too: the augmented model should not carry the set's
+// normal wander as a change.
+int choose(const DiagnoseResult& r, double min_gain) {
+  int i = choose_raw(r, min_gain);
+  if (i < 0) return i;
+  // An effect that contains a simpler one must beat it by a margin (thresholds.hpp).
+  if (const auto& h = r.hypotheses[static_cast<std::size_t>(i)]; h.effects.size() == 1) {
+    if (const auto simpler = effect_model(h.effects[0].effect).generalises) {
+      for (std::size_t j = 0; j < r.hypotheses.size(); ++j) {
+        const auto& g = r.hypotheses[j];
+        if (g.effects.size() == 1 && g.effects[0].effect == *simpler) {
+          if (g.score >= h.score - kNestedMarginPct) i = static_cast<int>(j);
+          break;  // ranked: the simpler effect's best place
+        }
+      }
+    }
+  }
+  // A nonlinearity must beat the best linear explanation by a margin (thresholds.hpp).
+  if (has_nonlinearity(r.hypotheses[static_cast<std::size_t>(i)])) {
+    const int j = choose_raw(r, min_gain, true);
+    if (j >= 0 && r.hypotheses[static_cast<std::size_t>(j)].score >=
+                      r.hypotheses[static_cast<std::size_t>(i)].score - kNonlinearOverLinearPct)
+      i = j;
+  }
+  const auto& h = r.hypotheses[static_cast<std::size_t>(i)];
+  if (h.effects.size() != 2 || h.effects[1].effect != Effect::kDrift) return i;
+  bool drift_immaterial = false;
+  int single = -1;
+  for (std::size_t j = 0; j < r.hypotheses.size(); ++j) {
+    const auto& g = r.hypotheses[j];
+    if (g.effects.size() != 1) continue;
+    if (g.effects[0].effect == Effect::kDrift) drift_immaterial = immaterial_drift(g, r.problem);
+    if (single < 0 && g.effects[0].effect == h.effects[0].effect && g.score >= min_gain)
+      single = static_cast<int>(j);  // ranked: the effect's best place
+  }
+  return drift_immaterial && single >= 0 ? single : i;
+}
+
+// The verdict word of a chosen hypothesis: its input-side effect (the first listed, pairs
+// keep the better single first), else its disturbance.
+std::string verdict_of(const HypothesisFit& h) {
+  for (const auto& e : h.effects)
+    if (kind_of(e.effect) != EffectKind::kDisturbance) return to_string(e.effect);
+  return to_string(h.effects.front().effect);
+}
+
+}  // namespace rig::diagnose

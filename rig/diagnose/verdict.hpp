@@ -1,0 +1,27 @@
+// The verdict of `rig diagnose` (docs/diagnose.md, Method step 4): which of the ranked
+// hypotheses the data support, and the word it is called by. Every threshold is named in
+// thresholds.hpp with its reason.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "rig/diagnose/diagnose.hpp"
+
+namespace rig::diagnose {
+
+bool has_input_side(const HypothesisFit& h);
+bool has_nonlinearity(const HypothesisFit& h);
+
+// Whether h could be a verdict (step 4.2): every fitted value credible (none stopped at a
+// bound as a stand-in for another shape) and every play or hysteresis evidenced by the
+// direction tests.
+bool could_be_verdict(const HypothesisFit& h, const Location& location);
+
+// The index of the chosen hypothesis in r.hypotheses (ranked), -1 for none.
+int choose(const DiagnoseResult& r, double min_gain_pct);
+
+// The verdict word of a chosen hypothesis.
+std::string verdict_of(const HypothesisFit& h);
+
+}  // namespace rig::diagnose
