@@ -8,29 +8,16 @@
 #include <random>
 
 #include "concealed.hpp"
+#include "records.hpp"
 #include "rig/diagnose/blocks.hpp"
 #include "rig/diagnose/diagnose.hpp"
 
 namespace rig::diagnose {
 namespace {
 
-// The null case's record (its input and the nominal model), 200 s.
-DiagnoseInput null_record(std::uint64_t seed) {
-  ConcealedSpec spec;
-  spec.seed = seed;
-  spec.duration_s = 200.0;
-  return make_concealed(spec).input;
-}
-
-Eigen::VectorXd white(Eigen::Index n, double std, std::uint64_t seed) {
-  std::mt19937_64 rng(seed);
-  std::normal_distribution<double> g(0.0, std);
-  Eigen::VectorXd x(n);
-  for (auto& v : x) v = g(rng);
-  return x;
-}
-
-double rms(const Eigen::VectorXd& x) { return std::sqrt((x.array() - x.mean()).square().mean()); }
+using test::null_record;
+using test::rms;
+using test::white;
 
 TEST(Placement, RateLimitBehindTheGovernorsLagIsFoundInTheLoop) {
   DiagnoseInput in = null_record(41);
