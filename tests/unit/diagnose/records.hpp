@@ -8,6 +8,8 @@
 #include <random>
 
 #include "concealed.hpp"
+#include "rig/diagnose/blocks.hpp"
+#include "rig/diagnose/placement.hpp"
 
 namespace rig::diagnose::test {
 
@@ -29,6 +31,21 @@ inline Eigen::VectorXd white(Eigen::Index n, double std, std::uint64_t seed) {
 
 inline double rms(const Eigen::VectorXd& x) {
   return std::sqrt((x.array() - x.mean()).square().mean());
+}
+
+// A rate limit inside the loop, behind a front lag of lag_s, at half the rms rate of the
+// signal there (in bias-% equivalent per second, *limit), acting from sample `from`: the
+// signal after it (the input of the rest of the model, G / F).
+inline Eigen::VectorXd in_loop_rate_limited(const DiagnoseInput& in, double lag_s, double* limit,
+                                            Eigen::Index from = 0) {
+  const Eigen::VectorXd u = in.u.array() - in.u.mean();
+  const Eigen::VectorXd w = front_signal(u, lag_s, in.dt_s);
+  const double k = rms(u) / rms(w);
+  const Eigen::VectorXd w_rate = (w.tail(w.size() - 1) - w.head(w.size() - 1)) / in.dt_s;
+  *limit = 0.5 * k * rms(w_rate);
+  Eigen::VectorXd v = rate_limit(k * w, *limit, in.dt_s) / k;
+  v.head(from) = w.head(from);  // no limit before it
+  return v;
 }
 
 }  // namespace rig::diagnose::test

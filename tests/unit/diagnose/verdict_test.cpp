@@ -41,14 +41,9 @@ TEST(Verdict, APeakAtItsDampingBoundIsNoEvidenceOfAMode) {
 TEST(Verdict, ARateLimitFromHalfWayIsFoundInTheLoopFromItsOnset) {
   DiagnoseInput in = null_record(45);
   const double lag_s = 0.15;
-  const Eigen::VectorXd u = in.u.array() - in.u.mean();
-  const Eigen::VectorXd w = front_signal(u, lag_s, in.dt_s);
-  const double k = rms(u) / rms(w);
-  const Eigen::VectorXd w_rate = (w.tail(w.size() - 1) - w.head(w.size() - 1)) / in.dt_s;
-  const double limit = 0.5 * k * rms(w_rate);
-  Eigen::VectorXd v = rate_limit(k * w, limit, in.dt_s) / k;
-  const Eigen::Index onset = v.size() / 2;
-  v.head(onset) = w.head(onset);  // no limit before the onset
+  const Eigen::Index onset = in.u.size() / 2;
+  double limit = 0.0;
+  const Eigen::VectorXd v = test::in_loop_rate_limited(in, lag_s, &limit, onset);
   const Eigen::VectorXd z = model::simulate(rest_after_front(in.model, lag_s), v, in.dt_s);
   in.y = z + white(z.size(), 0.15 * rms(z), 11);
   const DiagnoseResult r = diagnose(in);
