@@ -113,9 +113,12 @@ bool has_input_side(const HypothesisFit& h) {
   });
 }
 
+// An input-side nonlinearity or a nonlinear output feedback (nonlinear_stiffness,
+// coulomb_friction): not a linear explanation for the nonlinear-over-linear margin.
 bool has_nonlinearity(const HypothesisFit& h) {
   return std::any_of(h.effects.begin(), h.effects.end(), [](const AppliedEffect& e) {
-    return kind_of(e.effect) == EffectKind::kInputNonlinearity;
+    const EffectKind k = kind_of(e.effect);
+    return k == EffectKind::kInputNonlinearity || k == EffectKind::kFeedback;
   });
 }
 
