@@ -114,7 +114,8 @@ TEST_F(DiagnoseToml, LongerFuelDeadTimeGoesBackIntoThePlant) {
   const std::string html((std::istreambuf_iterator<char>(page)), std::istreambuf_iterator<char>());
   EXPECT_NE(html.find("<h2>Plant</h2>"), std::string::npos);
   EXPECT_NE(html.find("engine.dead_time_s"), std::string::npos);
-  EXPECT_NE(html.find(fmt::format("fit {:.1f} % -&gt; {:.1f} %", before, after)), std::string::npos);
+  EXPECT_NE(html.find(fmt::format("fit {:.1f} % -&gt; {:.1f} %", before, after)),
+            std::string::npos);
   EXPECT_NE(html.find("the plant replayed, as given and augmented"), std::string::npos);
 }
 
