@@ -20,11 +20,14 @@ std::string where_in_frequency(const Location& loc) {
   if (!best || !loc.freq.band_hz) return "";
   const std::complex<double> e = best->measured / best->model;
   const double ph = std::arg(e) * 180.0 / std::numbers::pi;
+  const auto [lo, hi] = *loc.freq.band_hz;
+  const std::string where = fmt::format("{:.3g}", lo) == fmt::format("{:.3g}", hi)
+                                ? fmt::format("near {:.3g} Hz", lo)  // one bin
+                                : fmt::format("between {:.3g} and {:.3g} Hz", lo, hi);
   return fmt::format(
-      "The measured response departs from the model between {:.3g} and {:.3g} Hz: at {:.3g} Hz "
-      "its gain is {:.0f} % of the model's and its phase is {:.0f} degrees {} it. ",
-      loc.freq.band_hz->first, loc.freq.band_hz->second, best->freq_hz, 100.0 * std::abs(e),
-      std::abs(ph), ph < 0 ? "behind" : "ahead of");
+      "The measured response departs from the model {}: at {:.3g} Hz its gain is {:.0f} % of "
+      "the model's and its phase is {:.0f} degrees {} it. ",
+      where, best->freq_hz, 100.0 * std::abs(e), std::abs(ph), ph < 0 ? "behind" : "ahead of");
 }
 
 std::string where_in_time_and_level(const DiagnoseResult& r) {
