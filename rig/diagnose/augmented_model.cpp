@@ -8,6 +8,7 @@
 
 #include "rig/diagnose/blocks.hpp"
 #include "rig/diagnose/effect_registry.hpp"
+#include "rig/diagnose/error_loop.hpp"
 #include "rig/diagnose/placement.hpp"
 #include "rig/diagnose/thresholds.hpp"
 #include "rig/signal/ac_coupling.hpp"
@@ -188,7 +189,7 @@ ModelOutput model_output(const Problem& pr, std::span<const AppliedEffect> effec
   ModelOutput out;
   const DataScales& s = pr.scales;
   bool input_side = false, feedback = false;
-  const AppliedEffect *loop = nullptr, *fb = nullptr;
+  const AppliedEffect *loop = nullptr, *fb = nullptr, *err = nullptr;
   Eigen::VectorXd v = pr.u;
   for (const auto& e : effects) {
     if (e.params.size() != parameter_specs(e.effect, s).size() ||
@@ -208,6 +209,10 @@ ModelOutput model_output(const Problem& pr, std::span<const AppliedEffect> effec
       if (fb) throw std::invalid_argument("model_output: two effects in the feedback");
       fb = &e;
     }
+    if (e.place == Place::kError) {
+      if (err) throw std::invalid_argument("model_output: two effects on the error");
+      err = &e;
+    }
   }
   out.tf = augmented_tf(pr.tf, effects);
   Eigen::VectorXd z;
@@ -216,6 +221,13 @@ ModelOutput model_output(const Problem& pr, std::span<const AppliedEffect> effec
   } else {
     z = linear_output(pr, effects, out.tf, loop, v, feedback);
     if (fb) z = close_feedback(pr, effects, out.tf, loop, *fb, v, feedback, std::move(z));
+    if (err) {
+      const auto sample = effect_model(err->effect).apply_sample;
+      const Eigen::VectorXd e0 = pr.u - pr.baseline_z / s.dc_gain;
+      const double sigma = std::sqrt((e0.array() - e0.mean()).square().mean());
+      z = close_error_loop(out.tf, pr.u, z, s.dc_gain, pr.dt_s,
+                           [&](double e) { return sample(err->params, e, sigma); });
+    }
     apply_at_output(pr, effects, z);
     const Eigen::Index n = z.size();
     if (pr.active_from > 0) z.head(pr.active_from) = pr.baseline_z.head(pr.active_from);

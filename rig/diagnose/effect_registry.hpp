@@ -69,6 +69,10 @@ struct EffectModel {
   // The input nonlinearity v -> N(v) (kInputNonlinearity).
   Eigen::VectorXd (*apply_input)(const Problem& problem, const Params& p,
                                  Eigen::VectorXd v) = nullptr;
+  // Its memoryless form on one sample, when it has one: then it is also tried on the
+  // governor's error (Place::kError; rig/diagnose/error_loop.hpp), stepped with the loop.
+  // sigma: the standard deviation of the signal there (as apply_input measures it).
+  double (*apply_sample)(const Params& p, double v, double sigma) = nullptr;
   // Its terms of the output feedback (kFeedback).
   void (*feedback)(const Problem& problem, const Params& p, FeedbackTerms& terms) = nullptr;
   // A disturbance's part of the output's least-squares fit (augmented_model.cpp): columns
@@ -97,7 +101,7 @@ struct EffectModel {
   // Whether a fitted value can be a verdict (nullptr: any can): one whose shape parameter
   // stopped at its bound is the search's best stand-in for some other shape, not an estimate
   // (a resonance at its largest damping ratio is a broad reshaping of the band).
-  bool (*credible)(const AppliedEffect& effect) = nullptr;
+  bool (*credible)(const AppliedEffect& effect, const DataScales& scales) = nullptr;
 };
 
 // Throws std::out_of_range for a value outside the enum.

@@ -40,6 +40,13 @@ std::string where_in_time_and_level(const DiagnoseResult& r) {
     s += fmt::format("The mismatch is present only from {:.0f} s to {:.0f} s of the record. ",
                      static_cast<double>(from) * pr.dt_s, static_cast<double>(to) * pr.dt_s);
   const auto& a = r.location.amp;
+  if (a.two_level_input) {
+    s += "The input takes two levels (a PRBS): on it any static map of the bias is a gain and "
+         "an offset, and a play or a slew limit acts alike on every step, so nonlinearities "
+         "are looked for only inside the loop and at the output, and the input's direction is "
+         "no evidence of a play. ";
+    return s;
+  }
   if (a.amplitude_dependent && a.by_level.size() >= 2)
     s += fmt::format(
         "The gain the recording shows relative to the model is {:.2f} for the smallest "
@@ -74,6 +81,9 @@ std::string what_effect_means(const AppliedEffect& e, const HypothesisFit& h, co
         "the output's (bias-% equivalent) departure from that nonlinearity (a hysteretic "
         "spring)",
         e.place_params.at(0));
+  if (e.place == Place::kError)
+    s += ", not on the bias but on the error of the loop the model closes (the bias less the "
+         "output over the static gain, in bias-%: a governor's power error)";
   if (e.place == Place::kOutput)
     s += fmt::format(
         ", not on the bias but on the measured output (the values are bias-% equivalents; "

@@ -162,6 +162,9 @@ HypothesisFit score_hypothesis(const Problem& pr, std::vector<AppliedEffect> eff
   h.validation_fit_after = weighted_fit_pct(pr.y, h.yhat, pr.val_weight);
   h.score = h.validation_fit_after - h.validation_fit_before -
             options.penalty_pct_per_parameter * h.parameter_count();
+  // A model whose output did not settle (a feedback loop that did not converge) explains
+  // nothing: it ranks last, and a NaN would break the ranking's order.
+  if (!std::isfinite(h.score)) h.score = -std::numeric_limits<double>::infinity();
   return h;
 }
 

@@ -64,7 +64,17 @@ struct AmplitudeLocation {
   double output_level_chi2 = 0.0;
   bool amplitude_dependent = false, sign_dependent = false, direction_dependent = false;
   bool output_level_dependent = false;
+  // The input takes two levels (a PRBS, two_level_input()): on it every static map is a
+  // gain and an offset, and sign(u) and sign(du/dt) are linear in u and du/dt, so the
+  // level, sign and direction tests cannot tell a nonlinearity from a linear change. They
+  // still detect a mismatch (a residual correlated with a function of the input), but are
+  // no evidence of a nonlinearity or a play.
+  bool two_level_input = false;
 };
+
+// Whether u (operating point removed) sits on two levels: the two most common values
+// (to kTwoLevelResolution of its standard deviation) hold kTwoLevelShare of the samples.
+bool two_level_input(const Eigen::VectorXd& u);
 
 using ident::residual_tests;
 using ident::ResidualTests;

@@ -17,9 +17,11 @@
 #include <cmath>
 #include <limits>
 #include <numeric>
+#include <vector>
 
 #include "rig/diagnose/blocks.hpp"
 #include "rig/diagnose/locate.hpp"
+#include "rig/diagnose/thresholds.hpp"
 #include "rig/signal/ac_coupling.hpp"
 
 namespace rig::diagnose {
@@ -279,10 +281,31 @@ AmplitudeLocation locate_amplitude(const Problem& pr, const Eigen::VectorXd& r_a
   a.output_level_chi2 = output_level_chi2(yh, r, n_eff, nb);
   a.output_level_dependent = a.output_level_chi2 > kLevelChi2Bound;
   const double spread = a.by_level.back().gain - a.by_level.front().gain;
+  a.two_level_input = two_level_input(pr.u);
   a.amplitude_dependent = a.level_chi2 > kLevelChi2Bound && std::abs(spread) > 0.02;
   a.sign_dependent = std::abs(a.sign_z) > 5.0;
   a.direction_dependent = std::abs(a.direction_z) > 5.0;
   return a;
+}
+
+bool two_level_input(const Eigen::VectorXd& u) {
+  const Eigen::Index n = u.size();
+  const double sd = std::sqrt((u.array() - u.mean()).square().mean());
+  if (n < 2 || !(sd > 0.0)) return false;
+  std::vector<long long> q(static_cast<std::size_t>(n));
+  for (Eigen::Index k = 0; k < n; ++k)
+    q[static_cast<std::size_t>(k)] = std::llround(u(k) / (thresholds::kTwoLevelResolution * sd));
+  std::sort(q.begin(), q.end());
+  std::vector<Eigen::Index> runs;  // how many samples hold each value
+  for (std::size_t i = 0; i < q.size();) {
+    std::size_t j = i;
+    while (j < q.size() && q[j] == q[i]) ++j;
+    runs.push_back(static_cast<Eigen::Index>(j - i));
+    i = j;
+  }
+  std::sort(runs.rbegin(), runs.rend());
+  const Eigen::Index top = runs[0] + (runs.size() > 1 ? runs[1] : 0);
+  return static_cast<double>(top) >= thresholds::kTwoLevelShare * static_cast<double>(n);
 }
 
 }  // namespace rig::diagnose

@@ -9,19 +9,39 @@
 
 namespace rig::diagnose {
 
-const char* to_string(Place place) {
-  switch (place) {
-    case Place::kInput:
-      return "input";
-    case Place::kInLoop:
-      return "in_loop";
-    case Place::kOutput:
-      return "output";
-    case Place::kFeedback:
-      return "feedback";
-  }
-  return "?";
+namespace {
+
+struct PlaceWords {
+  Place place;
+  const char* name;    // report.json
+  const char* suffix;  // after the effect's word in report.html
+  const char* acts;    // augmented_model.json
+};
+
+constexpr PlaceWords kPlaceWords[] = {
+    {Place::kInput, "input", "", "input, before the tf"},
+    {Place::kInLoop, "in_loop", " (in the loop)",
+     "in the loop: after 1/(1 + s front_lag_s), before the tf times (1 + s front_lag_s)"},
+    {Place::kOutput, "output", " (at the output)",
+     "output: on the tf's output over its static gain"},
+    {Place::kFeedback, "feedback", " (in an output feedback)",
+     "feedback: u - feedback_gain (y' - N(y')) into the tf, y' = its output over its static gain"},
+    {Place::kError, "error", " (on the loop's error)",
+     "error: on e = u - y / G0 of a unity-feedback loop whose closed loop is the tf: "
+     "y = tf (u - (e - N(e)))"},
+};
+
+const PlaceWords& words(Place place) {
+  for (const auto& w : kPlaceWords)
+    if (w.place == place) return w;
+  return kPlaceWords[0];
 }
+
+}  // namespace
+
+const char* to_string(Place place) { return words(place).name; }
+const char* place_suffix(Place place) { return words(place).suffix; }
+const char* place_acts(Place place) { return words(place).acts; }
 
 std::vector<ParamSpec> place_specs(Place place, const DataScales& s) {
   if (place == Place::kFeedback)
@@ -60,6 +80,8 @@ Problem problem_at(const Problem& pr, Place place, double front_lag_s) {
     at.u = in_loop_scale(pr, w) * w;
   } else if (place == Place::kOutput || place == Place::kFeedback) {
     at.u = pr.baseline_z / pr.scales.dc_gain;
+  } else if (place == Place::kError) {
+    at.u = pr.u - pr.baseline_z / pr.scales.dc_gain;
   } else {
     return at;
   }

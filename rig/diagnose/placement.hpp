@@ -9,6 +9,11 @@
 //            the output nonlinearly, as in a nonlinear state-space or linear-fractional
 //            model: a hysteretic spring; c, feedback_gain, fitted;
 //            only for effects whose model allows it, EffectModel::in_feedback)
+//   error    y = G (u - (e - N(e))), e = u - y / G0 (on the error of the governor's loop,
+//            as a governor's deadband: G taken as the closed loop of a unity-feedback loop
+//            that tracks the bias, L = G' / (1 - G'), G' = G / G0; then y = G0 L N(e) is
+//            the same as this form, which needs no L; only for memoryless effects,
+//            EffectModel::apply_sample; rig/diagnose/error_loop.hpp)
 // At each place the nonlinearity acts on a signal on the bias's scale: in the loop F u times
 // k = std(u) / std(F u) (the signal there, as many bias-% as it has the bias's rms: how a
 // rack's travel per % of bias is measured), at the output the output over the static gain
@@ -27,8 +32,8 @@ namespace rig::diagnose {
 struct Problem;
 struct Location;
 
-inline constexpr std::array<Place, 4> kAllPlaces = {Place::kInput, Place::kInLoop, Place::kOutput,
-                                                    Place::kFeedback};
+inline constexpr std::array<Place, 5> kAllPlaces = {Place::kInput, Place::kInLoop, Place::kOutput,
+                                                    Place::kFeedback, Place::kError};
 
 // Whether the baseline allows the in-loop place (G / F proper: G strictly proper).
 bool in_loop_possible(const model::TransferFunction& tf);

@@ -161,9 +161,7 @@ std::string placed_name(const HypothesisFit& h) {
   for (const auto& e : h.effects) {
     if (!s.empty()) s.push_back('+');
     s += to_string(e.effect);
-    if (e.place == Place::kInLoop) s += " (in the loop)";
-    if (e.place == Place::kOutput) s += " (at the output)";
-    if (e.place == Place::kFeedback) s += " (in an output feedback)";
+    s += place_suffix(e.place);
   }
   return s;
 }
@@ -206,10 +204,7 @@ void write_report_html(const DiagnoseResult& r, const ReportContext& c,
   std::string where;  // the place of the verdict's effect, when not on the input
   if (const HypothesisFit* h = r.chosen())
     for (const auto& e : h->effects)
-      if (to_string(e.effect) == r.verdict && e.place != Place::kInput)
-        where = e.place == Place::kInLoop   ? " (inside the loop)"
-                : e.place == Place::kOutput ? " (at the output)"
-                                            : " (in an output feedback)";
+      if (to_string(e.effect) == r.verdict) where = place_suffix(e.place);
   page.note(tone, "Verdict: " + r.verdict + where);
   page.paragraph(r.explanation);
   const auto& loc = r.location;

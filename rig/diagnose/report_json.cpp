@@ -85,7 +85,8 @@ json location_json(const DiagnoseResult& r) {
             {"sign_dependent", loc.amp.sign_dependent},
             {"direction_z", loc.amp.direction_z},
             {"direction_dependent", loc.amp.direction_dependent},
-            {"output_direction_z", loc.amp.output_direction_z}}},
+            {"output_direction_z", loc.amp.output_direction_z},
+            {"two_level_input", loc.amp.two_level_input}}},
           {"residual_tests",
            {{"whiteness_ratio", loc.tests.whiteness_ratio},
             {"white", loc.tests.white},
@@ -148,19 +149,11 @@ model::ModelFile augmented_model(const DiagnoseResult& r, const model::ModelFile
       for (std::size_t i = 0; i < e.params.size(); ++i) p[specs[i].name] = e.params[i];
       const auto place = place_specs(e.place, r.problem.scales);
       for (std::size_t i = 0; i < e.place_params.size(); ++i) p[place[i].name] = e.place_params[i];
-      const char* where =
-          kind_of(e.effect) == EffectKind::kInputNonlinearity
-              ? (e.place == Place::kInLoop ? "in the loop: after 1/(1 + s front_lag_s), before the "
-                                             "tf times (1 + s front_lag_s)"
-                 : e.place == Place::kOutput ? "output: on the tf's output over its static gain"
-                 : e.place == Place::kFeedback
-                     ? "feedback: u - feedback_gain (y' - N(y')) into the tf, "
-                       "y' = its output over its static gain"
-                     : "input, before the tf")
-          : kind_of(e.effect) == EffectKind::kFeedback
-              ? "output feedback around the tf's rational part"
-          : kind_of(e.effect) == EffectKind::kDisturbance ? "added to the output"
-                                                          : "in num/den/delay_s";
+      const char* where = kind_of(e.effect) == EffectKind::kInputNonlinearity ? place_acts(e.place)
+                          : kind_of(e.effect) == EffectKind::kFeedback
+                              ? "output feedback around the tf's rational part"
+                          : kind_of(e.effect) == EffectKind::kDisturbance ? "added to the output"
+                                                                          : "in num/den/delay_s";
       aug.push_back({{"effect", to_string(e.effect)}, {"params", p}, {"acts", where}});
     }
     json derived = json::object();

@@ -18,6 +18,7 @@ namespace {
 using thresholds::kDominantDisturbanceGainPct;
 using thresholds::kPairedInputSingles;
 using thresholds::kPairedWithDisturbance;
+using thresholds::kRefinedDominantPlaces;
 using thresholds::kRefinedForwardPairs;
 using thresholds::kRefinedSingles;
 using thresholds::kScreenEvaluations;
@@ -26,6 +27,11 @@ using thresholds::kScreenMinSamples;
 using thresholds::kScreenOversampling;
 
 using Candidate = std::vector<std::vector<AppliedEffect>>;  // starting points of one hypothesis
+
+// Places that hold one effect only (one front lag, one feedback path, one error loop).
+bool one_per_record(Place p) {
+  return p == Place::kInLoop || p == Place::kFeedback || p == Place::kError;
+}
 
 void rank(std::vector<HypothesisFit>& hs) {
   std::stable_sort(hs.begin(), hs.end(), [](const HypothesisFit& a, const HypothesisFit& b) {
@@ -42,6 +48,10 @@ std::vector<Candidate> singles(Effect e, const Problem& pr, const Location& loc)
   for (Place place : kAllPlaces) {
     if (place == Place::kInLoop && !in_loop_possible(pr.tf)) continue;
     if (place == Place::kFeedback && !effect_model(e).in_feedback) continue;
+    if (place == Place::kError && !effect_model(e).apply_sample) continue;
+    // On a two-level input any map of the bias itself acts as a linear one: a static map
+    // as a gain and an offset, a play or a slew limit the same on every (equal) step.
+    if (place == Place::kInput && loc.amp.two_level_input) continue;
     out.push_back(placed_starts(e, place, pr, loc));
   }
   return out;
@@ -197,7 +207,7 @@ std::vector<Candidate> pair_candidates(const std::vector<HypothesisFit>& singles
     for (std::size_t j = i + 1; j < std::min(inputs.size(), kPairedInputSingles); ++j) {
       const AppliedEffect& b = inputs[j]->effects[0];
       if (i >= kPairedInputSingles || (lag(a.effect) && lag(b.effect))) continue;  // twins
-      if (a.place == b.place && (a.place == Place::kInLoop || a.place == Place::kFeedback))
+      if (a.place == b.place && one_per_record(a.place))
         continue;  // one front lag, one feedback path
       out.push_back({{a, b}});
     }
@@ -208,28 +218,28 @@ std::vector<Candidate> pair_candidates(const std::vector<HypothesisFit>& singles
   return out;
 }
 
+// Whether the pair a + b (either order, same places) is among the candidates cs.
+bool fitted(const std::vector<Candidate>& cs, const AppliedEffect& a, const AppliedEffect& b) {
+  const auto same = [](const AppliedEffect& x, const AppliedEffect& y) {
+    return x.effect == y.effect && x.place == y.place;
+  };
+  return std::any_of(cs.begin(), cs.end(), [&](const Candidate& c) {
+    const auto& p = c.front();
+    return p.size() == 2 && ((same(p[0], a) && same(p[1], b)) || (same(p[0], b) && same(p[1], a)));
+  });
+}
+
 // A forward step from the best input-side single that could be a verdict, and from the best
 // linear one (a nonlinearity in the loop can stand in for a lag, and the lag's pair with a
 // gain is then never formed): each with every other input-side effect at its best place,
 // but for the pairs already among `existing`.
-std::vector<Candidate> forward_pairs(const std::vector<HypothesisFit>& singles,
+std::vector<Candidate> forward_pairs(const Problem& pr, const std::vector<HypothesisFit>& singles,
                                      const std::vector<Candidate>& existing, const Location& loc) {
   const auto lag = [](Effect e) { return e == Effect::kExtraLag || e == Effect::kSensorLag; };
-  const auto same = [](const AppliedEffect& x, const AppliedEffect& y) {
-    return x.effect == y.effect && x.place == y.place;
-  };
-  const auto fitted = [&](const std::vector<Candidate>& cs, const AppliedEffect& a,
-                          const AppliedEffect& b) {
-    return std::any_of(cs.begin(), cs.end(), [&](const Candidate& c) {
-      const auto& p = c.front();
-      return p.size() == 2 &&
-             ((same(p[0], a) && same(p[1], b)) || (same(p[0], b) && same(p[1], a)));
-    });
-  };
   std::vector<Candidate> out;
   for (const bool linear : {false, true}) {
     const auto first = std::find_if(singles.begin(), singles.end(), [&](const HypothesisFit& h) {
-      return h.effects.size() == 1 && has_input_side(h) && could_be_verdict(h, loc) &&
+      return h.effects.size() == 1 && has_input_side(h) && could_be_verdict(h, loc, pr.scales) &&
              (!linear || !has_nonlinearity(h));
     });
     if (first == singles.end()) continue;
@@ -240,11 +250,28 @@ std::vector<Candidate> forward_pairs(const std::vector<HypothesisFit>& singles,
       const AppliedEffect& b = h.effects[0];
       if (std::find(seen.begin(), seen.end(), b.effect) != seen.end()) continue;
       seen.push_back(b.effect);
-      if ((lag(a.effect) && lag(b.effect)) ||
-          (a.place == b.place && (a.place == Place::kInLoop || a.place == Place::kFeedback)))
+      if ((lag(a.effect) && lag(b.effect)) || (a.place == b.place && one_per_record(a.place)))
         continue;
       if (!fitted(existing, a, b) && !fitted(out, a, b)) out.push_back({{a, b}});
     }
+  }
+  return out;
+}
+
+// When a disturbance dominates the residual, each input-side nonlinearity was placed (its
+// best place ranked) without it: every other place of it is paired with that disturbance
+// too, screened as the forward pairs are (a governor's error deadband behind a drift).
+std::vector<Candidate> places_with_dominant(const std::vector<HypothesisFit>& singles,
+                                            const std::vector<Candidate>& existing) {
+  const auto dist = std::find_if(singles.begin(), singles.end(),
+                                 [](const HypothesisFit& h) { return !has_input_side(h); });
+  if (dist == singles.end() || dist->score < kDominantDisturbanceGainPct) return {};
+  std::vector<Candidate> out;
+  for (const auto& h : singles) {
+    if (h.effects.size() != 1 || kind_of(h.effects[0].effect) != EffectKind::kInputNonlinearity)
+      continue;
+    if (!fitted(existing, h.effects[0], dist->effects[0]))
+      out.push_back({{h.effects[0], dist->effects[0]}});
   }
   return out;
 }
@@ -273,8 +300,14 @@ std::vector<HypothesisFit> search_hypotheses(const Problem& pr, const Location& 
   if (!o.try_pairs || hs.empty() || explains(pr, hs.front(), loc)) return hs;
   const std::vector<Candidate> paired = pair_candidates(hs);
   std::vector<HypothesisFit> pairs = fit_all(pr, paired, base, o);
+  std::vector<Candidate> tried = paired;
+  for (auto& c : forward_pairs(pr, hs, paired, loc)) tried.push_back(std::move(c));
+  for (auto& h : screen_and_refine(
+           pr, {tried.begin() + static_cast<std::ptrdiff_t>(paired.size()), tried.end()}, base, o,
+           kRefinedForwardPairs))
+    pairs.push_back(std::move(h));
   for (auto& h :
-       screen_and_refine(pr, forward_pairs(hs, paired, loc), base, o, kRefinedForwardPairs))
+       screen_and_refine(pr, places_with_dominant(hs, tried), base, o, kRefinedDominantPlaces))
     pairs.push_back(std::move(h));
   for (auto& h : pairs) hs.push_back(std::move(h));
   rank(hs);

@@ -52,18 +52,29 @@ inline constexpr Eigen::Index kScreenMinSamples = 20000;
 inline constexpr double kScreenOversampling = 10.0;
 inline constexpr int kScreenMaxDecimation = 4;
 
+// --- A two-level input (locate.hpp two_level_input) ---
+// A PRBS sits on two values; rounding to 1 % of the input's standard deviation keeps a
+// Gaussian's thousands of values apart (its two most common then hold ~1 % of the samples)
+// while a recorded PRBS's setpoints, exact to the register's resolution, stay two. 95 %:
+// a few samples of a ramp between levels (a slew-limited setpoint writer) are allowed.
+inline constexpr double kTwoLevelResolution = 0.01;
+inline constexpr double kTwoLevelShare = 0.95;
+
 // --- Pairs (diagnose.cpp) ---
 // Only the best input-side singles are paired with each other (every pair is a full fit).
 inline constexpr std::size_t kPairedInputSingles = 3;
 // The best input-side single is also paired with every other input-side effect (at its best
 // place): these pairs are screened as the singles are, and this many of them refined.
 inline constexpr std::size_t kRefinedForwardPairs = 3;
-// Of those, the best this many are also paired with each detected disturbance.
+// Of the best input-side singles, this many are also paired with each detected disturbance.
 inline constexpr std::size_t kPairedWithDisturbance = 2;
 // A disturbance whose single scores this much dominates the residual: the input-side
 // singles, fitted without it, are ranked by noise then, so every input-side effect is paired
 // with it (the drift materiality gain below: the same "clearly more than noise").
 inline constexpr double kDominantDisturbanceGainPct = 3.0;
+// Its pairs with the other places of each nonlinearity (not the best: it was placed without
+// the disturbance) are screened; the best this many are then searched in full.
+inline constexpr std::size_t kRefinedDominantPlaces = 2;
 
 // --- Drift materiality (diagnose.cpp) ---
 // A drift alone is material when its rms is at least this fraction of the input-driven
@@ -129,6 +140,9 @@ inline constexpr double kFrontLagMaxS = 2.0;
 // A fitted front lag at this fraction of kFrontLagMaxS or more stopped at the bound
 // (placement.hpp place_credible).
 inline constexpr double kFrontLagAtBound = 0.98;
+// An in-loop limiter's recovery_s at this fraction of its bound or more stopped there
+// (effects/common.hpp recovery_credible).
+inline constexpr double kAtRecoveryBound = 0.98;
 // Its starting points: an actuator (50 ms) and a governor's filtered output (300 ms).
 inline constexpr double kFrontLagSeedsS[] = {0.05, 0.3};
 // The feedback place's gain c: the output's nonlinear part fed back, as a share of the

@@ -22,17 +22,19 @@ using thresholds::kOperatingLevelStds;
 // follows the output's motion) on the output's.
 bool direction_evidenced(const HypothesisFit& h, const Location& loc) {
   return std::none_of(h.effects.begin(), h.effects.end(), [&](const AppliedEffect& e) {
-    const double z = e.place == Place::kFeedback ? loc.amp.output_direction_z : loc.amp.direction_z;
+    // On a two-level input the input's direction is linear in du/dt: no evidence.
+    const double input_z = loc.amp.two_level_input ? 0.0 : loc.amp.direction_z;
+    const double z = e.place == Place::kFeedback ? loc.amp.output_direction_z : input_z;
     return effect_model(e.effect).needs_direction_evidence && std::abs(z) < kDirectionEvidenceZ;
   });
 }
 
 // Every effect's fitted value and place can be a verdict (EffectModel::credible,
 // place_credible): none stopped at a bound as a stand-in for another shape.
-bool credible(const HypothesisFit& h) {
-  return std::all_of(h.effects.begin(), h.effects.end(), [](const AppliedEffect& e) {
+bool credible(const HypothesisFit& h, const DataScales& scales) {
+  return std::all_of(h.effects.begin(), h.effects.end(), [&](const AppliedEffect& e) {
     const auto check = effect_model(e.effect).credible;
-    return (!check || check(e)) && place_credible(e);
+    return (!check || check(e, scales)) && place_credible(e);
   });
 }
 
@@ -94,7 +96,8 @@ int choose_raw(const DiagnoseResult& r, double min_gain, bool linear_only = fals
     const auto& h = r.hypotheses[i];
     if (h.score < min_gain) break;
     if (linear_only && has_nonlinearity(h)) continue;
-    if (!direction_evidenced(h, r.location) || !credible(h) || !pair_adds(r.hypotheses, h))
+    if (!direction_evidenced(h, r.location) || !credible(h, r.problem.scales) ||
+        !pair_adds(r.hypotheses, h))
       continue;
     if (immaterial_drift(h, r.problem) || sampling_convention_only(h, r.problem)) continue;
     if (best_any < 0) best_any = static_cast<int>(i);
@@ -122,8 +125,8 @@ bool has_nonlinearity(const HypothesisFit& h) {
   });
 }
 
-bool could_be_verdict(const HypothesisFit& h, const Location& loc) {
-  return credible(h) && direction_evidenced(h, loc);
+bool could_be_verdict(const HypothesisFit& h, const Location& loc, const DataScales& scales) {
+  return credible(h, scales) && direction_evidenced(h, loc);
 }
 
 // A pair "effect + drift" whose drift alone is immaterial is reported as the effect alone

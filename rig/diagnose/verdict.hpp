@@ -16,7 +16,7 @@ bool has_nonlinearity(const HypothesisFit& h);
 // Whether h could be a verdict (step 4.2): every fitted value credible (none stopped at a
 // bound as a stand-in for another shape) and every play or hysteresis evidenced by the
 // direction tests.
-bool could_be_verdict(const HypothesisFit& h, const Location& location);
+bool could_be_verdict(const HypothesisFit& h, const Location& location, const DataScales& scales);
 
 // The index of the chosen hypothesis in r.hypotheses (ranked), -1 for none.
 int choose(const DiagnoseResult& r, double min_gain_pct);

@@ -35,12 +35,7 @@ Eigen::VectorXcd roots(const Eigen::VectorXd& p_in) {
   return Eigen::EigenSolver<Eigen::MatrixXd>(c, false).eigenvalues();
 }
 
-// exp of [[A h, B h, 0], [0, 0, h], [0, 0, 0]]: the state map over a step of length h for
-// an input that starts at v0 and rises with slope g: x+ = Phi x + Ga v0 + Gb g.
-struct FohStep {
-  Eigen::MatrixXd phi;
-  Eigen::VectorXd ga, gb;
-};
+}  // namespace
 
 FohStep foh_step(const Eigen::MatrixXd& a, const Eigen::VectorXd& b, double h) {
   const Eigen::Index n = a.rows();
@@ -51,8 +46,6 @@ FohStep foh_step(const Eigen::MatrixXd& a, const Eigen::VectorXd& b, double h) {
   const Eigen::MatrixXd e = m.exp();
   return {e.topLeftCorner(n, n), e.block(0, n, n, 1), e.block(0, n + 1, n, 1)};
 }
-
-}  // namespace
 
 std::complex<double> TransferFunction::evaluate(std::complex<double> s) const {
   return polyval(num, s) / polyval(den, s) * std::exp(-s * delay_s);

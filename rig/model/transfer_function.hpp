@@ -45,6 +45,15 @@ inline bool operator==(const ModelOrder& a, const ModelOrder& b) {
 // The same TF scaled so that a_n = 1 (monic denominator); leading zeros trimmed.
 TransferFunction monic(const TransferFunction& tf);
 
+// exp of [[A h, B h, 0], [0, 0, h], [0, 0, 0]]: the state map over a step of length h for
+// an input that starts at v0 and rises with slope g: x+ = Phi x + Ga v0 + Gb g (the
+// first-order hold simulate() steps with; also for loops stepped sample by sample).
+struct FohStep {
+  Eigen::MatrixXd phi;
+  Eigen::VectorXd ga, gb;
+};
+FohStep foh_step(const Eigen::MatrixXd& a, const Eigen::VectorXd& b, double h);
+
 // Output of tf for input samples u_k = u(k dt), zero initial state, u = 0 before t = 0.
 // Exact for an input that is piecewise linear between samples (first-order hold): the
 // state-space step uses the matrix exponential of the system augmented with the input and

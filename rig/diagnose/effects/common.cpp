@@ -6,6 +6,7 @@
 #include <cmath>
 
 #include "rig/diagnose/hypothesis_fit.hpp"
+#include "rig/diagnose/thresholds.hpp"
 
 namespace rig::diagnose::effects {
 
@@ -30,6 +31,10 @@ double derived_or(const HypothesisFit& h, const std::string& key, double fallbac
 
 double recovery_hi_s(const DataScales& s) {
   return std::max(10.0 * s.dt_s, std::min(60.0, s.duration_s / 10.0));
+}
+
+bool recovery_credible(const AppliedEffect& e, std::size_t i, const DataScales& s) {
+  return e.params.size() <= i || e.params[i] < thresholds::kAtRecoveryBound * recovery_hi_s(s);
 }
 
 std::string in_loop_words(const std::vector<double>& p, std::size_t i, double dt_s) {

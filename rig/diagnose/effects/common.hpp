@@ -44,6 +44,12 @@ double derived_or(const HypothesisFit& h, const std::string& key, double fallbac
 
 // The longest recovery_s of the in-loop limiters (saturation, rate_limit).
 double recovery_hi_s(const DataScales& s);
+// A limiter whose recovery_s (at index i) stopped at that bound is no verdict: the lost
+// position hardly comes back within the record, so the fit reached for a slow,
+// level-dependent reshaping (an elasto-plastic loop, an AC coupling), not a limit whose
+// loop restores it (plantsim's and gensim's limits fit 2-5 s; at the bound only stand-ins
+// were seen, gensim seeds 1-2 and a PRBS hysteresis).
+bool recovery_credible(const AppliedEffect& e, std::size_t i, const DataScales& s);
 // A limit inside an integrating loop loses position that the loop restores slowly: the words
 // for recovery_s = p[i], empty for a plain limit.
 std::string in_loop_words(const std::vector<double>& p, std::size_t i, double dt_s);

@@ -26,9 +26,18 @@ Eigen::VectorXd apply(const Problem&, const Params& p, Eigen::VectorXd v) {
   return deadband(v, p[0]);
 }
 
+double apply_sample(const Params& p, double v, double) {
+  return v > p[0] ? v - p[0] : v < -p[0] ? v + p[0] : 0.0;
+}
+
 std::string meaning(const AppliedEffect& e, const HypothesisFit&, const Problem& pr) {
   const auto& p = e.params;
   const double su = pr.scales.u_std;
+  if (e.place == Place::kError)
+    return fmt::format(
+        "errors within +-{:.3g} ({:.0f} % of the input's standard deviation) have no effect: a "
+        "deadband, inside which the governor holds its output",
+        p[0], 100.0 * p[0] / su);
   return fmt::format(
       "inputs within +-{:.3g} of the operating point ({:.0f} % of the input's standard "
       "deviation) have no effect: a deadband",
@@ -53,6 +62,7 @@ const EffectModel kDeadbandEffect{
     .parameter_specs = specs,
     .seeds = seeds,
     .apply_input = apply,
+    .apply_sample = apply_sample,
     .explain = meaning,
     .map_to_plant = to_plant,
 };

@@ -42,6 +42,10 @@ void to_plant(const PlantContext& c, PlantTarget& m) {
         fmt::format("rate_limit_per_s {:.4g} %/s x {:.4g} pu/% on the actuator", p[0], a_r));
 }
 
+bool credible(const AppliedEffect& e, const DataScales& s) {
+  return effects::recovery_credible(e, 1, s);
+}
+
 }  // namespace
 
 const EffectModel kRateLimitEffect{
@@ -54,6 +58,7 @@ const EffectModel kRateLimitEffect{
     .apply_input = apply,
     .explain = meaning,
     .map_to_plant = to_plant,
+    .credible = credible,
 };
 
 }  // namespace rig::diagnose

@@ -28,7 +28,10 @@ constexpr double kSeriesModeBelow = 0.5;
 // its frequency and leaves its damping free.
 constexpr double kAtDampingBound = 0.98 * kMaxModeDamping;
 
-bool credible(const AppliedEffect& e) {
+// The moved-mode seed starts this far below the model's mode (a few percent of stiffness).
+constexpr double kMovedModeSeedRatio = 0.95;
+
+bool credible(const AppliedEffect& e, const DataScales&) {
   return e.params[1] < kAtDampingBound || e.params[3] < kSeriesModeBelow;
 }
 
@@ -45,10 +48,16 @@ std::vector<Params> seeds(const Problem& pr, const Location& loc) {
   const double band_mid =
       f.band_hz ? std::sqrt(std::max(f.band_hz->first, 1e-3) * f.band_hz->second) : fr;
   const double above_band = std::min(1.2 * f.input_band_hz, 0.4 / pr.dt_s);
-  return {{fr, 0.05, f.peak_ratio, 1.0},
-          {band_mid, 0.1, 1.5, 1.0},
-          {above_band, 0.1, 0.05, 0.0},
-          {0.7 * above_band, 0.2, 0.05, 0.0}};
+  std::vector<Params> out{{fr, 0.05, f.peak_ratio, 1.0},
+                          {band_mid, 0.1, 1.5, 1.0},
+                          {above_band, 0.1, 0.05, 0.0},
+                          {0.7 * above_band, 0.2, 0.05, 0.0}};
+  // The model's own mode moved down (a softer shaft or coupling pulls the electromechanical
+  // mode with it): the factor's zeros near the old mode cancel it, its poles sit below.
+  if (const auto mode = dominant_mode(pr.tf); mode && mode->second < kMaxModeDamping)
+    out.push_back({kMovedModeSeedRatio * mode->first, mode->second, 1.0,
+                   kMovedModeSeedRatio * kMovedModeSeedRatio});
+  return out;
 }
 
 // (a s^2 + 2 zeta r w s + w^2) / (s^2 + 2 zeta w s + w^2) with a = hf_gain: at a = 1
@@ -60,8 +69,22 @@ void apply(model::TransferFunction& tf, const Params& p) {
   tf.den = poly_multiply(tf.den, effects::vec({1.0 / (w * w), 2.0 * zeta / w, 1.0}));
 }
 
-std::string meaning(const AppliedEffect& e, const HypothesisFit&, const Problem&) {
+// The factor's zeros, at w / sqrt(hf_gain), cancel a mode of the model this close to them
+// (relative frequency): the model's mode has moved to the factor's poles.
+constexpr double kSameModeFrequency = 0.1;
+
+std::string meaning(const AppliedEffect& e, const HypothesisFit&, const Problem& pr) {
   const auto& p = e.params;
+  const auto mode = dominant_mode(pr.tf);
+  if (p[3] >= kSeriesModeBelow && mode) {
+    const double zeros_hz = p[0] / std::sqrt(p[3]);
+    if (std::abs(zeros_hz - mode->first) <= kSameModeFrequency * mode->first)
+      return fmt::format(
+          "the model's mode at {:.2f} Hz (damping ratio {:.3f}) has moved to {:.2f} Hz (damping "
+          "ratio {:.3f}): a change of the stiffness or inertia behind it, e.g. a softer shaft "
+          "or coupling",
+          mode->first, mode->second, p[0], p[1]);
+  }
   if (p[3] < kSeriesModeBelow)
     return fmt::format(
         "an unmodelled mode in series with the model at {:.2f} Hz (damping ratio {:.3f}; a "

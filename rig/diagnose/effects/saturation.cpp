@@ -73,6 +73,10 @@ void to_plant(const PlantContext& c, PlantTarget& m) {
   }
 }
 
+bool credible(const AppliedEffect& e, const DataScales& s) {
+  return effects::recovery_credible(e, 2, s);
+}
+
 }  // namespace
 
 const EffectModel kSaturationEffect{
@@ -85,6 +89,7 @@ const EffectModel kSaturationEffect{
     .apply_input = apply,
     .explain = meaning,
     .map_to_plant = to_plant,
+    .credible = credible,
 };
 
 }  // namespace rig::diagnose

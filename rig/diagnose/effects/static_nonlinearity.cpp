@@ -5,6 +5,7 @@
 // Plant: none (augmented_model.json carries it).
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cmath>
 
 #include "rig/diagnose/blocks.hpp"
@@ -30,6 +31,11 @@ Eigen::VectorXd apply(const Problem&, const Params& p, Eigen::VectorXd v) {
   return out + p[2] * v.cwiseMax(0.0);
 }
 
+double apply_sample(const Params& p, double v, double sigma) {
+  const double s = sigma > 0.0 ? sigma : 1.0;
+  return v + p[0] * v * v / s + p[1] * v * v * v / (s * s) + p[2] * std::max(v, 0.0);
+}
+
 std::string meaning(const AppliedEffect& e, const HypothesisFit&, const Problem&) {
   const auto& p = e.params;
   std::string s = fmt::format(
@@ -52,6 +58,7 @@ const EffectModel kStaticNonlinearityEffect{
     .parameter_specs = specs,
     .seeds = seeds,
     .apply_input = apply,
+    .apply_sample = apply_sample,
     .explain = meaning,
 };
 

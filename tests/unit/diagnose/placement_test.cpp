@@ -5,12 +5,15 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdint>
 #include <random>
 
 #include "concealed.hpp"
 #include "records.hpp"
 #include "rig/diagnose/blocks.hpp"
 #include "rig/diagnose/diagnose.hpp"
+#include "rig/diagnose/effect_registry.hpp"
+#include "rig/diagnose/locate.hpp"
 
 namespace rig::diagnose {
 namespace {
@@ -42,14 +45,48 @@ TEST(Placement, ADeadbandOnTheBiasIsAtTheInputAndTriedAtEachPlace) {
   const DiagnoseResult r = diagnose(in);
   ASSERT_EQ(r.verdict, "deadband") << r.explanation;
   EXPECT_EQ(r.chosen()->effects.front().place, Place::kInput) << r.explanation;
-  int places[4] = {0, 0, 0, 0};
+  int places[5] = {0, 0, 0, 0, 0};
   for (const auto& h : r.hypotheses)
     if (h.effects.size() == 1 && h.effects[0].effect == Effect::kDeadband)
       ++places[static_cast<int>(h.effects[0].place)];
-  EXPECT_EQ(places[0], 1);
-  EXPECT_EQ(places[1], 1);
-  EXPECT_EQ(places[2], 1);
-  EXPECT_EQ(places[3], 0);  // a deadband is not tried in the feedback
+  EXPECT_EQ(places[static_cast<int>(Place::kInput)], 1);
+  EXPECT_EQ(places[static_cast<int>(Place::kInLoop)], 1);
+  EXPECT_EQ(places[static_cast<int>(Place::kOutput)], 1);
+  EXPECT_EQ(places[static_cast<int>(Place::kFeedback)], 0);  // not tried in the feedback
+  EXPECT_EQ(places[static_cast<int>(Place::kError)], 1);     // memoryless: on the error
+}
+
+// A PRBS-like bias: +-1 held for bits of 10 samples, each bit's sign random (seeded).
+Eigen::VectorXd two_level(Eigen::Index n, std::uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  Eigen::VectorXd u(n);
+  double level = 1.0;
+  for (Eigen::Index k = 0; k < n; ++k) {
+    if (k % 10 == 0) level = (rng() & 1u) ? 1.0 : -1.0;
+    u(k) = level;
+  }
+  return u;
+}
+
+TEST(Placement, OnATwoLevelInputNothingIsFittedOnTheBiasItself) {
+  DiagnoseInput in = null_record(47);
+  in.u = two_level(in.u.size(), 47);
+  model::TransferFunction plant = in.model;  // a 60 ms transducer lag the model lacks
+  plant.den = poly_multiply(plant.den, Eigen::Vector2d(0.06, 1.0));
+  const Eigen::VectorXd z = model::simulate(plant, in.u, in.dt_s);
+  in.y = z + white(z.size(), 0.1 * rms(z), 14);
+  const DiagnoseResult r = diagnose(in);
+  EXPECT_TRUE(r.location.amp.two_level_input);
+  // sign(du/dt) is linear in du/dt here: no claim of a play from it.
+  EXPECT_EQ(r.explanation.find("reversal of the input's direction"), std::string::npos);
+  for (const auto& h : r.hypotheses)
+    for (const auto& e : h.effects)
+      EXPECT_FALSE(kind_of(e.effect) == EffectKind::kInputNonlinearity && e.place == Place::kInput)
+          << to_string(e.effect);
+  ASSERT_TRUE(r.verdict == "extra_lag" || r.verdict == "sensor_lag") << r.explanation;
+  EXPECT_NE(r.explanation.find("two levels"), std::string::npos);
+  // A Gaussian record is not two-level.
+  EXPECT_FALSE(two_level_input(null_record(47).u));
 }
 
 TEST(Timing, HalfASampleOfTimingIsANullNotADeadTime) {

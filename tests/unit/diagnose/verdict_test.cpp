@@ -32,10 +32,25 @@ TEST(Verdict, APeakAtItsDampingBoundIsNoEvidenceOfAMode) {
   const auto credible = effect_model(Effect::kResonance).credible;
   ASSERT_NE(credible, nullptr);
   // freq_hz, zeta, peak_ratio, hf_gain
-  EXPECT_FALSE(credible({Effect::kResonance, {1.3, 0.4, 0.7, 0.65}}));  // broad reshaping
-  EXPECT_TRUE(credible({Effect::kResonance, {1.3, 0.05, 3.0, 1.0}}));   // a peak
+  EXPECT_FALSE(credible({Effect::kResonance, {1.3, 0.4, 0.7, 0.65}}, {}));  // broad reshaping
+  EXPECT_TRUE(credible({Effect::kResonance, {1.3, 0.05, 3.0, 1.0}}, {}));   // a peak
   // A mode in series above the band shows only its flank: its damping is free.
-  EXPECT_TRUE(credible({Effect::kResonance, {4.5, 0.4, 0.05, 0.0}}));
+  EXPECT_TRUE(credible({Effect::kResonance, {4.5, 0.4, 0.05, 0.0}}, {}));
+}
+
+TEST(Verdict, ALimiterWhoseRecoveryStoppedAtItsBoundIsNoEvidenceOfALimit) {
+  DataScales s;  // a 120 s record at 100 Hz: recovery_s at most 12 s
+  s.dt_s = 0.01;
+  s.duration_s = 120.0;
+  const auto sat = effect_model(Effect::kSaturation).credible;
+  const auto rate = effect_model(Effect::kRateLimit).credible;
+  ASSERT_NE(sat, nullptr);
+  ASSERT_NE(rate, nullptr);
+  EXPECT_FALSE(sat({Effect::kSaturation, {0.4, 0.7, 12.0}}, s));
+  EXPECT_TRUE(sat({Effect::kSaturation, {0.4, 0.7, 3.0}}, s));   // a governor's loop
+  EXPECT_TRUE(sat({Effect::kSaturation, {0.4, 0.7, 0.01}}, s));  // a plain limit
+  EXPECT_FALSE(rate({Effect::kRateLimit, {5.0, 11.9}}, s));
+  EXPECT_TRUE(rate({Effect::kRateLimit, {5.0, 2.0}}, s));
 }
 
 TEST(Verdict, ARateLimitFromHalfWayIsFoundInTheLoopFromItsOnset) {

@@ -1,0 +1,65 @@
+#include "rig/diagnose/error_loop.hpp"
+
+#include <cmath>
+#include <vector>
+
+namespace rig::diagnose {
+namespace {
+
+// When the dead time is under a sample, d_k acts on the output at the same sample through
+// the hold's slope: the scalar loop d_k = e_k - N(e_k) is solved by this many passes (the
+// slope's share is O(dt / T), so each pass shrinks the error by as much).
+constexpr int kSameSamplePasses = 3;
+
+}  // namespace
+
+Eigen::VectorXd close_error_loop(const model::TransferFunction& tf_in, const Eigen::VectorXd& u,
+                                 const Eigen::VectorXd& z0, double g0, double dt_s,
+                                 const std::function<double(double)>& nonlinearity) {
+  const model::TransferFunction tf = model::monic(tf_in);
+  const Eigen::Index n = tf.den.size() - 1, samples = u.size();
+  Eigen::VectorXd b = Eigen::VectorXd::Zero(n + 1);
+  b.tail(tf.num.size()) = tf.num;
+  const double delay_samples = tf.delay_s / dt_s;
+  const auto whole = static_cast<Eigen::Index>(std::floor(delay_samples + 1e-12));
+  const double frac = delay_samples - static_cast<double>(whole);
+  // Controllable form as model::filtered_derivatives: x = [p^{n-1} w .. w], w = ud / A(p).
+  Eigen::MatrixXd a = Eigen::MatrixXd::Zero(n, n);
+  if (n > 0) a.row(0) = -tf.den.tail(n).transpose();
+  for (Eigen::Index i = 1; i < n; ++i) a(i, i - 1) = 1.0;
+  Eigen::VectorXd bin = Eigen::VectorXd::Zero(n);
+  if (n > 0) bin(0) = 1.0;
+  const model::FohStep hold = n > 0 ? model::foh_step(a, bin, dt_s) : model::FohStep{};
+  std::vector<double> d(static_cast<std::size_t>(samples), 0.0);
+  auto d_at = [&](Eigen::Index j) { return j >= 0 ? d[static_cast<std::size_t>(j)] : 0.0; };
+  auto ud = [&](Eigen::Index k) {
+    return (1.0 - frac) * d_at(k - whole) + frac * d_at(k - whole - 1);
+  };
+  Eigen::VectorXd x = Eigen::VectorXd::Zero(n), x_prev = x, y(samples);
+  double ud_prev = 0.0;
+  for (Eigen::Index k = 0; k < samples; ++k) {
+    // The state at k and the correction G d there, for the d_k guessed so far.
+    auto correction = [&]() {
+      const double v = ud(k);
+      if (k > 0 && n > 0)
+        x = hold.phi * x_prev + hold.ga * ud_prev + hold.gb * ((v - ud_prev) / dt_s);
+      const double top = v + (n > 0 ? a.row(0).dot(x) : 0.0);
+      return b(0) * top + (n > 0 ? b.tail(n).dot(x) : 0.0);
+    };
+    const int passes = whole == 0 ? kSameSamplePasses : 1;
+    double c = 0.0;
+    d[static_cast<std::size_t>(k)] = d_at(k - 1);
+    for (int pass = 0; pass < passes; ++pass) {
+      c = correction();
+      const double e = u(k) - (z0(k) - c) / g0;
+      d[static_cast<std::size_t>(k)] = e - nonlinearity(e);
+    }
+    if (whole == 0) c = correction();
+    y(k) = z0(k) - c;
+    x_prev = x;
+    ud_prev = ud(k);
+  }
+  return y;
+}
+
+}  // namespace rig::diagnose

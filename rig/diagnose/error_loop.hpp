@@ -1,0 +1,25 @@
+// A memoryless nonlinearity on the error of the governor's loop (placement.hpp, "error").
+//
+// Knowing only the closed loop G (bias -> output) of a loop that tracks the bias with unity
+// feedback (e = u - y / G0 drives the governor, so G' = G / G0 -> 1 at DC), the loop gain is
+// L = G' / (1 - G'). A nonlinearity N on the error, y = G0 L N(e), is then the same as
+//   y = G (u - d),  d = e - N(e),  e = u - y / G0,
+// which needs no L: the baseline output z0 = G u less G d, stepped sample by sample because
+// d depends on the output at the same instant. For N the identity, d = 0 and y = z0 exactly.
+#pragma once
+
+#include <Eigen/Core>
+#include <functional>
+
+#include "rig/model/transfer_function.hpp"
+
+namespace rig::diagnose {
+
+// z0 = simulate(tf, u); g0 = the loop's static gain (y per unit of e); nonlinearity = N.
+// The correction G d is stepped with the same first-order hold as model::simulate, its
+// delayed input taken as linear between samples (a fractional dead time interpolated).
+Eigen::VectorXd close_error_loop(const model::TransferFunction& tf, const Eigen::VectorXd& u,
+                                 const Eigen::VectorXd& z0, double g0, double dt_s,
+                                 const std::function<double(double)>& nonlinearity);
+
+}  // namespace rig::diagnose
