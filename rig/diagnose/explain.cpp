@@ -154,6 +154,14 @@ std::string explain(const DiagnoseResult& r) {
         "The residual is correlated with the input (peak {:.1f} times the 99 % bound at a lag "
         "of {:.2f} s): dynamics are missing. ",
         t.cross_ratio, t.cross_peak_lag_s);
+  else if (const int i = r.location.half_dependent; i >= 0) {
+    const auto& half = r.location.halves[static_cast<std::size_t>(i)];
+    s += fmt::format(
+        "The residual is correlated with the input in the {} half of the record (peak {:.1f} "
+        "times the 99 % bound, threshold {:.2f} for either half) but not over the whole: "
+        "dynamics that changed during the record. ",
+        i == 0 ? "first" : "second", half.cross_ratio, half.cross_threshold);
+  }
   const HypothesisFit* h = r.chosen();
   if (!h) {
     s += "No effect of the library explains it: the best";

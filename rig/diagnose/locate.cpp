@@ -84,8 +84,22 @@ Disturbances locate_disturbances(const Problem& pr, const Eigen::VectorXd& r,
 namespace {
 
 bool input_tests_fail(const Location& loc) {
-  return loc.freq.band_hz.has_value() || !loc.tests.independent || loc.amp.amplitude_dependent ||
-         loc.amp.sign_dependent || loc.amp.direction_dependent;
+  return loc.freq.band_hz.has_value() || !loc.tests.independent || loc.half_dependent >= 0 ||
+         loc.amp.amplitude_dependent || loc.amp.sign_dependent || loc.amp.direction_dependent;
+}
+
+// The cross-correlation test on each half of r (after the warm-up), the 1 % shared.
+void test_halves(const Problem& pr, const Eigen::VectorXd& r, Eigen::Index from, Eigen::Index lags,
+                 Location& loc) {
+  const Eigen::Index n = r.size() - from, half = n / 2;
+  if (half < 4 * lags) return;
+  for (int i = 0; i < 2; ++i) {
+    const Eigen::Index at = from + i * half, len = i == 0 ? half : n - half;
+    loc.halves[static_cast<std::size_t>(i)] =
+        residual_tests(r.segment(at, len), pr.u.segment(at, len), pr.dt_s, lags, 2.0);
+    if (!loc.halves[static_cast<std::size_t>(i)].independent && loc.half_dependent < 0)
+      loc.half_dependent = i;
+  }
 }
 
 // The input tests again on the residual with the drift taken out: a wander of the output
@@ -122,6 +136,7 @@ Location locate(const Problem& pr, const Eigen::VectorXd& yhat) {
   const double band = std::max(loc.freq.input_band_hz, 1.0 / pr.scales.duration_s);
   const auto lags = std::clamp<Eigen::Index>(std::llround(2.0 / (band * pr.dt_s)), 25, 200);
   loc.tests = residual_tests(r.tail(r.size() - from), pr.u.tail(r.size() - from), pr.dt_s, lags);
+  test_halves(pr, r, from, lags, loc);
   loc.dist = locate_disturbances(pr, r, loc.freq);
   loc.input_mismatch = input_tests_fail(loc);
   loc.disturbance = loc.dist.periodic || loc.dist.drift;

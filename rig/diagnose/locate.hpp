@@ -4,6 +4,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <array>
 #include <complex>
 #include <optional>
 #include <utility>
@@ -92,6 +93,10 @@ struct Location {
   std::vector<TimeWindow> windows;  // where the residual leaves its noise bounds
   AmplitudeLocation amp;
   ResidualTests tests;
+  // The cross-correlation test on each half of the record (the 1 % shared by the two): an
+  // effect present in half of it is diluted by the other half in the whole record's test.
+  std::array<ResidualTests, 2> halves;
+  int half_dependent = -1;  // the half (0, 1) whose residual is correlated with u; -1 none
   Disturbances dist;
   bool input_mismatch = false;  // frequency, cross-correlation or amplitude test failed
   bool behind_drift = false;    // ... only once the drift was taken out of the residual

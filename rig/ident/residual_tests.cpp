@@ -34,7 +34,7 @@ double lag_product(const Eigen::VectorXd& a, const Eigen::VectorXd& b, Eigen::In
 }  // namespace
 
 ResidualTests residual_tests(const Eigen::VectorXd& r_in, const Eigen::VectorXd& u_in, double dt_s,
-                             Eigen::Index max_lag) {
+                             Eigen::Index max_lag, double family) {
   ResidualTests t;
   const Eigen::VectorXd r = r_in.array() - r_in.mean();
   const Eigen::VectorXd u = u_in.array() - u_in.mean();
@@ -61,7 +61,9 @@ ResidualTests residual_tests(const Eigen::VectorXd& r_in, const Eigen::VectorXd&
   Eigen::Index at = 0;
   t.cross_ratio = (t.cross_corr.cwiseAbs().array() / t.cross_bound.array()).maxCoeff(&at);
   t.cross_peak_lag_s = t.lags_s(at);
-  t.cross_threshold = normal_quantile(1.0 - 0.005 / static_cast<double>(2 * m + 1)) / 2.58;
+  t.cross_threshold =
+      normal_quantile(1.0 - 0.005 / (std::max(family, 1.0) * static_cast<double>(2 * m + 1))) /
+      2.58;
   t.white = t.whiteness_ratio <= 1.0;
   t.independent = t.cross_ratio <= t.cross_threshold;
   return t;

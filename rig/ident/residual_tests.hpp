@@ -19,8 +19,9 @@ struct ResidualTests {
   bool white = true, independent = true;
 };
 
-// residual and input of one record; max_lag M is clamped to [1, N/4].
+// residual and input of one record; max_lag M is clamped to [1, N/4]. family: how many such
+// tests share the 1 % (Bonferroni: each half of a record, 2).
 ResidualTests residual_tests(const Eigen::VectorXd& residual, const Eigen::VectorXd& u, double dt_s,
-                             Eigen::Index max_lag);
+                             Eigen::Index max_lag, double family = 1.0);
 
 }  // namespace rig::ident

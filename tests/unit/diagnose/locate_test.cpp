@@ -1,6 +1,8 @@
 #include <gtest/gtest.h>
 
 #include "concealed.hpp"
+#include "records.hpp"
+#include "rig/diagnose/blocks.hpp"
 #include "rig/diagnose/split.hpp"
 
 namespace rig::diagnose {
@@ -57,6 +59,36 @@ TEST(Locate, PeriodicDisturbanceIsALineUncorrelatedWithTheInput) {
   const Located l = locate_case(Effect::kPeriodicDisturbance, Concealment::kNoise, 24);
   EXPECT_TRUE(l.loc.dist.periodic);
   EXPECT_NEAR(l.loc.dist.line_freq_hz, 0.73, 0.005);
+}
+
+// A lag that appears half-way: the residual is correlated with the input in the second half
+// only; on null records neither half fires (each half's test holds half of the 1 %).
+TEST(Locate, AnEffectInTheSecondHalfIsSeenInThatHalf) {
+  DiagnoseInput in = test::null_record(71);
+  const Eigen::VectorXd u = in.u.array() - in.u.mean();
+  model::TransferFunction lagged = in.model;
+  lagged.den = poly_multiply(lagged.den, Eigen::Vector2d(0.03, 1.0));
+  Eigen::VectorXd z = model::simulate(in.model, u, in.dt_s);
+  const Eigen::Index mid = z.size() / 2;
+  z.tail(z.size() - mid) = model::simulate(lagged, u, in.dt_s).tail(z.size() - mid);
+  in.y = z + test::white(z.size(), 0.15 * test::rms(z), 15);
+  int blocks = 0;
+  Eigen::Index warm = 0;
+  const Problem pr = prepare_problem(in, &blocks, &warm);
+  const Location loc = locate(pr, model_output(pr, {}).yhat);
+  EXPECT_TRUE(loc.halves[0].independent);
+  EXPECT_FALSE(loc.halves[1].independent);
+  EXPECT_TRUE(loc.input_mismatch);
+  int fired = 0;
+  for (std::uint64_t seed = 71; seed < 85; ++seed) {
+    DiagnoseInput null = test::null_record(seed);
+    const Eigen::VectorXd u0 = null.u.array() - null.u.mean();
+    const Eigen::VectorXd zn = model::simulate(null.model, u0, null.dt_s);
+    null.y = zn + test::white(zn.size(), 0.15 * test::rms(zn), seed + 200);
+    const Problem pn = prepare_problem(null, &blocks, &warm);
+    fired += locate(pn, model_output(pn, {}).yhat).half_dependent >= 0;
+  }
+  EXPECT_LE(fired, 1);
 }
 
 }  // namespace
