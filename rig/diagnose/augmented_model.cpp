@@ -211,9 +211,15 @@ ModelOutput model_output(const Problem& pr, std::span<const AppliedEffect> effec
     }
     if (e.place == Place::kError) {
       if (err) throw std::invalid_argument("model_output: two effects on the error");
+      if (!effect_model(e.effect).apply_sample)
+        throw std::invalid_argument(std::string("model_output: no memoryless form for ") +
+                                    to_string(e.effect) + " on the error");
       err = &e;
     }
   }
+  // The error loop's correction goes through the linear part only (error_loop.hpp).
+  if (err && (loop || fb || feedback))
+    throw std::invalid_argument("model_output: the error place with another loop");
   out.tf = augmented_tf(pr.tf, effects);
   Eigen::VectorXd z;
   if (!input_side) {
@@ -222,10 +228,11 @@ ModelOutput model_output(const Problem& pr, std::span<const AppliedEffect> effec
     z = linear_output(pr, effects, out.tf, loop, v, feedback);
     if (fb) z = close_feedback(pr, effects, out.tf, loop, *fb, v, feedback, std::move(z));
     if (err) {
+      // The loop tracks the bias as the input-placed effects left it (v).
       const auto sample = effect_model(err->effect).apply_sample;
       const Eigen::VectorXd e0 = pr.u - pr.baseline_z / s.dc_gain;
       const double sigma = std::sqrt((e0.array() - e0.mean()).square().mean());
-      z = close_error_loop(out.tf, pr.u, z, s.dc_gain, pr.dt_s,
+      z = close_error_loop(out.tf, v, z, s.dc_gain, pr.dt_s,
                            [&](double e) { return sample(err->params, e, sigma); });
     }
     apply_at_output(pr, effects, z);

@@ -22,7 +22,8 @@ Eigen::VectorXd close_error_loop(const model::TransferFunction& tf_in, const Eig
   b.tail(tf.num.size()) = tf.num;
   const double delay_samples = tf.delay_s / dt_s;
   const auto whole = static_cast<Eigen::Index>(std::floor(delay_samples + 1e-12));
-  const double frac = delay_samples - static_cast<double>(whole);
+  double frac = delay_samples - static_cast<double>(whole);
+  if (frac < 1e-9) frac = 0.0;
   // Controllable form as model::filtered_derivatives: x = [p^{n-1} w .. w], w = ud / A(p).
   Eigen::MatrixXd a = Eigen::MatrixXd::Zero(n, n);
   if (n > 0) a.row(0) = -tf.den.tail(n).transpose();
@@ -32,7 +33,9 @@ Eigen::VectorXd close_error_loop(const model::TransferFunction& tf_in, const Eig
   const model::FohStep hold = n > 0 ? model::foh_step(a, bin, dt_s) : model::FohStep{};
   std::vector<double> d(static_cast<std::size_t>(samples), 0.0);
   auto d_at = [&](Eigen::Index j) { return j >= 0 ? d[static_cast<std::size_t>(j)] : 0.0; };
+  // The delayed d (0 before it starts, as model::filtered_derivatives has it).
   auto ud = [&](Eigen::Index k) {
+    if (k - whole < 0 || (frac > 0.0 && k - whole - 1 < 0)) return 0.0;
     return (1.0 - frac) * d_at(k - whole) + frac * d_at(k - whole - 1);
   };
   Eigen::VectorXd x = Eigen::VectorXd::Zero(n), x_prev = x, y(samples);
@@ -41,8 +44,10 @@ Eigen::VectorXd close_error_loop(const model::TransferFunction& tf_in, const Eig
     // The state at k and the correction G d there, for the d_k guessed so far.
     auto correction = [&]() {
       const double v = ud(k);
+      // With a whole-sample dead time the delayed d jumps at it: the step into it holds 0.
+      const double v_end = (frac == 0.0 && k - whole <= 0) ? 0.0 : v;
       if (k > 0 && n > 0)
-        x = hold.phi * x_prev + hold.ga * ud_prev + hold.gb * ((v - ud_prev) / dt_s);
+        x = hold.phi * x_prev + hold.ga * ud_prev + hold.gb * ((v_end - ud_prev) / dt_s);
       const double top = v + (n > 0 ? a.row(0).dot(x) : 0.0);
       return b(0) * top + (n > 0 ? b.tail(n).dot(x) : 0.0);
     };

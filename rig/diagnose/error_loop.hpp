@@ -16,8 +16,9 @@
 namespace rig::diagnose {
 
 // z0 = simulate(tf, u); g0 = the loop's static gain (y per unit of e); nonlinearity = N.
-// The correction G d is stepped with the same first-order hold as model::simulate, its
-// delayed input taken as linear between samples (a fractional dead time interpolated).
+// The correction G d is stepped with the first-order hold of model::simulate (exact for a
+// whole-sample dead time; a fractional one is interpolated between samples, not split at
+// its knot).
 Eigen::VectorXd close_error_loop(const model::TransferFunction& tf, const Eigen::VectorXd& u,
                                  const Eigen::VectorXd& z0, double g0, double dt_s,
                                  const std::function<double(double)>& nonlinearity);

@@ -117,6 +117,9 @@ void look_behind_drift(const Problem& pr, const Eigen::VectorXd& r, const Eigen:
   while (from < r.size() && pr.est_weight(from) + pr.val_weight(from) <= 0.0) ++from;
   behind.tests =
       residual_tests(rc.tail(rc.size() - from), pr.u.tail(rc.size() - from), pr.dt_s, lags);
+  behind.halves = {};
+  behind.half_dependent = -1;
+  test_halves(pr, rc, from, lags, behind);
   if (!input_tests_fail(behind)) return;
   behind.input_mismatch = true;
   behind.behind_drift = true;

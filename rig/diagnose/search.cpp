@@ -33,6 +33,17 @@ bool one_per_record(Place p) {
   return p == Place::kInLoop || p == Place::kFeedback || p == Place::kError;
 }
 
+// Whether a and b can share a model: one effect per loop place, and the error loop (whose
+// correction goes through the linear part only, error_loop.hpp) with no other loop.
+bool pairable(const AppliedEffect& a, const AppliedEffect& b) {
+  if (a.place == b.place && one_per_record(a.place)) return false;
+  const auto loop = [](const AppliedEffect& e) {
+    return e.place == Place::kInLoop || e.place == Place::kFeedback ||
+           kind_of(e.effect) == EffectKind::kFeedback;
+  };
+  return !((a.place == Place::kError && loop(b)) || (b.place == Place::kError && loop(a)));
+}
+
 void rank(std::vector<HypothesisFit>& hs) {
   std::stable_sort(hs.begin(), hs.end(), [](const HypothesisFit& a, const HypothesisFit& b) {
     return a.score > b.score;
@@ -207,8 +218,7 @@ std::vector<Candidate> pair_candidates(const std::vector<HypothesisFit>& singles
     for (std::size_t j = i + 1; j < std::min(inputs.size(), kPairedInputSingles); ++j) {
       const AppliedEffect& b = inputs[j]->effects[0];
       if (i >= kPairedInputSingles || (lag(a.effect) && lag(b.effect))) continue;  // twins
-      if (a.place == b.place && one_per_record(a.place))
-        continue;  // one front lag, one feedback path
+      if (!pairable(a, b)) continue;  // one front lag, one feedback path, one error loop
       out.push_back({{a, b}});
     }
     for (std::size_t j = 0; j < dists.size(); ++j)
@@ -250,8 +260,7 @@ std::vector<Candidate> forward_pairs(const Problem& pr, const std::vector<Hypoth
       const AppliedEffect& b = h.effects[0];
       if (std::find(seen.begin(), seen.end(), b.effect) != seen.end()) continue;
       seen.push_back(b.effect);
-      if ((lag(a.effect) && lag(b.effect)) || (a.place == b.place && one_per_record(a.place)))
-        continue;
+      if ((lag(a.effect) && lag(b.effect)) || !pairable(a, b)) continue;
       if (!fitted(existing, a, b) && !fitted(out, a, b)) out.push_back({{a, b}});
     }
   }

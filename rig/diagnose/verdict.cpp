@@ -162,8 +162,9 @@ int choose(const DiagnoseResult& r, double min_gain) {
     const auto& g = r.hypotheses[j];
     if (g.effects.size() != 1) continue;
     if (g.effects[0].effect == Effect::kDrift) drift_immaterial = immaterial_drift(g, r.problem);
-    if (single < 0 && g.effects[0].effect == h.effects[0].effect && g.score >= min_gain)
-      single = static_cast<int>(j);  // ranked: the effect's best place
+    if (single < 0 && g.effects[0].effect == h.effects[0].effect &&
+        g.effects[0].place == h.effects[0].place && g.score >= min_gain)
+      single = static_cast<int>(j);  // the same effect at the same place
   }
   return drift_immaterial && single >= 0 ? single : i;
 }
