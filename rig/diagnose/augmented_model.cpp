@@ -18,7 +18,10 @@ namespace {
 
 constexpr double kTwoPi = 2.0 * std::numbers::pi;
 
+// A linear effect changes the transfer function, but on the governor's error (a dead time
+// inside the loop), where the error loop applies it instead.
 void apply_linear(model::TransferFunction& tf, const AppliedEffect& e) {
+  if (e.place == Place::kError) return;
   if (const auto apply = effect_model(e.effect).apply_linear) apply(tf, e.params);
 }
 
@@ -199,6 +202,13 @@ ModelOutput model_output(const Problem& pr, std::span<const AppliedEffect> effec
     const EffectKind kind = kind_of(e.effect);
     input_side = input_side || kind != EffectKind::kDisturbance;
     feedback = feedback || kind == EffectKind::kFeedback;
+    if (e.place == Place::kError) {
+      if (err) throw std::invalid_argument("model_output: two effects on the error");
+      if (!effect_model(e.effect).apply_on_error)
+        throw std::invalid_argument(std::string("model_output: no form on the error for ") +
+                                    to_string(e.effect));
+      err = &e;
+    }
     if (kind != EffectKind::kInputNonlinearity) continue;
     if (e.place == Place::kInput) v = apply_input(pr, e, std::move(v));
     if (e.place == Place::kInLoop) {
@@ -208,13 +218,6 @@ ModelOutput model_output(const Problem& pr, std::span<const AppliedEffect> effec
     if (e.place == Place::kFeedback) {
       if (fb) throw std::invalid_argument("model_output: two effects in the feedback");
       fb = &e;
-    }
-    if (e.place == Place::kError) {
-      if (err) throw std::invalid_argument("model_output: two effects on the error");
-      if (!effect_model(e.effect).apply_sample)
-        throw std::invalid_argument(std::string("model_output: no memoryless form for ") +
-                                    to_string(e.effect) + " on the error");
-      err = &e;
     }
   }
   // The error loop's correction goes through the linear part only (error_loop.hpp).
@@ -229,11 +232,12 @@ ModelOutput model_output(const Problem& pr, std::span<const AppliedEffect> effec
     if (fb) z = close_feedback(pr, effects, out.tf, loop, *fb, v, feedback, std::move(z));
     if (err) {
       // The loop tracks the bias as the input-placed effects left it (v).
-      const auto sample = effect_model(err->effect).apply_sample;
+      const auto on_error = effect_model(err->effect).apply_on_error;
       const Eigen::VectorXd e0 = pr.u - pr.baseline_z / s.dc_gain;
       const double sigma = std::sqrt((e0.array() - e0.mean()).square().mean());
-      z = close_error_loop(out.tf, v, z, s.dc_gain, pr.dt_s,
-                           [&](double e) { return sample(err->params, e, sigma); });
+      z = close_error_loop(out.tf, v, z, s.dc_gain, pr.dt_s, [&](std::span<const double> e) {
+        return on_error(err->params, e, sigma, pr.dt_s);
+      });
     }
     apply_at_output(pr, effects, z);
     const Eigen::Index n = z.size();

@@ -69,10 +69,13 @@ struct EffectModel {
   // The input nonlinearity v -> N(v) (kInputNonlinearity).
   Eigen::VectorXd (*apply_input)(const Problem& problem, const Params& p,
                                  Eigen::VectorXd v) = nullptr;
-  // Its memoryless form on one sample, when it has one: then it is also tried on the
-  // governor's error (Place::kError; rig/diagnose/error_loop.hpp), stepped with the loop.
-  // sigma: the standard deviation of the signal there (as apply_input measures it).
-  double (*apply_sample)(const Params& p, double v, double sigma) = nullptr;
+  // Its form on the governor's error, when it has one: then it is also tried there
+  // (Place::kError; rig/diagnose/error_loop.hpp), stepped with the loop. e: the error so
+  // far, e.back() the current sample; returns the effect's output at that sample (a
+  // memoryless map of e.back(), or a dead time reading e's past). sigma: the standard
+  // deviation of the error (as apply_input measures its signal), dt_s its sample period.
+  double (*apply_on_error)(const Params& p, std::span<const double> e, double sigma,
+                           double dt_s) = nullptr;
   // Its terms of the output feedback (kFeedback).
   void (*feedback)(const Problem& problem, const Params& p, FeedbackTerms& terms) = nullptr;
   // A disturbance's part of the output's least-squares fit (augmented_model.cpp): columns

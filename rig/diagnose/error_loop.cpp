@@ -8,14 +8,15 @@ namespace {
 
 // When the dead time is under a sample, d_k acts on the output at the same sample through
 // the hold's slope: the scalar loop d_k = e_k - N(e_k) is solved by this many passes (the
-// slope's share is O(dt / T), so each pass shrinks the error by as much).
+// slope's share is O(dt / T), so each pass shrinks the error by as much). A dead time on the
+// error of under a sample is solved the same way.
 constexpr int kSameSamplePasses = 3;
 
 }  // namespace
 
 Eigen::VectorXd close_error_loop(const model::TransferFunction& tf_in, const Eigen::VectorXd& u,
                                  const Eigen::VectorXd& z0, double g0, double dt_s,
-                                 const std::function<double(double)>& nonlinearity) {
+                                 const std::function<double(std::span<const double>)>& on_error) {
   const model::TransferFunction tf = model::monic(tf_in);
   const Eigen::Index n = tf.den.size() - 1, samples = u.size();
   Eigen::VectorXd b = Eigen::VectorXd::Zero(n + 1);
@@ -31,7 +32,7 @@ Eigen::VectorXd close_error_loop(const model::TransferFunction& tf_in, const Eig
   Eigen::VectorXd bin = Eigen::VectorXd::Zero(n);
   if (n > 0) bin(0) = 1.0;
   const model::FohStep hold = n > 0 ? model::foh_step(a, bin, dt_s) : model::FohStep{};
-  std::vector<double> d(static_cast<std::size_t>(samples), 0.0);
+  std::vector<double> d(static_cast<std::size_t>(samples), 0.0), es(d.size(), 0.0);
   auto d_at = [&](Eigen::Index j) { return j >= 0 ? d[static_cast<std::size_t>(j)] : 0.0; };
   // The delayed d (0 before it starts, as model::filtered_derivatives has it).
   auto ud = [&](Eigen::Index k) {
@@ -56,8 +57,9 @@ Eigen::VectorXd close_error_loop(const model::TransferFunction& tf_in, const Eig
     d[static_cast<std::size_t>(k)] = d_at(k - 1);
     for (int pass = 0; pass < passes; ++pass) {
       c = correction();
-      const double e = u(k) - (z0(k) - c) / g0;
-      d[static_cast<std::size_t>(k)] = e - nonlinearity(e);
+      const auto i = static_cast<std::size_t>(k);
+      es[i] = u(k) - (z0(k) - c) / g0;
+      d[i] = es[i] - on_error(std::span<const double>(es.data(), i + 1));
     }
     if (whole == 0) c = correction();
     y(k) = z0(k) - c;

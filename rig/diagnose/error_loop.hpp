@@ -1,4 +1,5 @@
-// A memoryless nonlinearity on the error of the governor's loop (placement.hpp, "error").
+// An effect on the error of the governor's loop (placement.hpp, "error"): a memoryless
+// nonlinearity N or a dead time.
 //
 // Knowing only the closed loop G (bias -> output) of a loop that tracks the bias with unity
 // feedback (e = u - y / G0 drives the governor, so G' = G / G0 -> 1 at DC), the loop gain is
@@ -10,17 +11,19 @@
 
 #include <Eigen/Core>
 #include <functional>
+#include <span>
 
 #include "rig/model/transfer_function.hpp"
 
 namespace rig::diagnose {
 
-// z0 = simulate(tf, u); g0 = the loop's static gain (y per unit of e); nonlinearity = N.
+// z0 = simulate(tf, u); g0 = the loop's static gain (y per unit of e); on_error = N, given the
+// error so far (its last element the current sample: a dead time reads the past ones).
 // The correction G d is stepped with the first-order hold of model::simulate (exact for a
 // whole-sample dead time; a fractional one is interpolated between samples, not split at
 // its knot).
 Eigen::VectorXd close_error_loop(const model::TransferFunction& tf, const Eigen::VectorXd& u,
                                  const Eigen::VectorXd& z0, double g0, double dt_s,
-                                 const std::function<double(double)>& nonlinearity);
+                                 const std::function<double(std::span<const double>)>& on_error);
 
 }  // namespace rig::diagnose

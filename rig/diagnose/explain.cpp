@@ -81,7 +81,8 @@ std::string what_effect_means(const AppliedEffect& e, const HypothesisFit& h, co
         "the output's (bias-% equivalent) departure from that nonlinearity (a hysteretic "
         "spring)",
         e.place_params.at(0));
-  if (e.place == Place::kError)
+  // (A linear effect in the loop acts the same anywhere in it: its own sentence says so.)
+  if (e.place == Place::kError && kind_of(e.effect) != EffectKind::kLinear)
     s += ", not on the bias but on the error of the loop the model closes (the bias less the "
          "output over the static gain, in bias-%: a governor's power error)";
   if (e.place == Place::kOutput)

@@ -12,8 +12,9 @@
 //   error    y = G (u - (e - N(e))), e = u - y / G0 (on the error of the governor's loop,
 //            as a governor's deadband: G taken as the closed loop of a unity-feedback loop
 //            that tracks the bias, L = G' / (1 - G'), G' = G / G0; then y = G0 L N(e) is
-//            the same as this form, which needs no L; only for memoryless effects,
-//            EffectModel::apply_sample; rig/diagnose/error_loop.hpp)
+//            the same as this form, which needs no L; for effects with a form there,
+//            EffectModel::apply_on_error: the memoryless nonlinearities, and a dead time
+//            (N a delay: a transport delay inside the loop); rig/diagnose/error_loop.hpp)
 // At each place the nonlinearity acts on a signal on the bias's scale: in the loop F u times
 // k = std(u) / std(F u) (the signal there, as many bias-% as it has the bias's rms: how a
 // rack's travel per % of bias is measured), at the output the output over the static gain

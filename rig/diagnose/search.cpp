@@ -50,16 +50,25 @@ void rank(std::vector<HypothesisFit>& hs) {
   });
 }
 
+// Whether an effect is tried at more than one place (singles below).
+bool several_places(Effect e) {
+  return kind_of(e) == EffectKind::kInputNonlinearity ||
+         (kind_of(e) == EffectKind::kLinear && effect_model(e).apply_on_error);
+}
+
 // One effect's hypotheses: an input-side nonlinearity at each place it can sit
-// (placement.hpp), any other effect once.
+// (placement.hpp), a linear effect with a form on the error at the input and there, any
+// other effect once.
 std::vector<Candidate> singles(Effect e, const Problem& pr, const Location& loc) {
+  if (kind_of(e) == EffectKind::kLinear && effect_model(e).apply_on_error)
+    return {placed_starts(e, Place::kInput, pr, loc), placed_starts(e, Place::kError, pr, loc)};
   if (kind_of(e) != EffectKind::kInputNonlinearity)
     return {placed_starts(e, Place::kInput, pr, loc)};
   std::vector<Candidate> out;
   for (Place place : kAllPlaces) {
     if (place == Place::kInLoop && !in_loop_possible(pr.tf)) continue;
     if (place == Place::kFeedback && !effect_model(e).in_feedback) continue;
-    if (place == Place::kError && !effect_model(e).apply_sample) continue;
+    if (place == Place::kError && !effect_model(e).apply_on_error) continue;
     // On a two-level input any map of the bias itself acts as a linear one: a static map
     // as a gain and an offset, a play or a slew limit the same on every (equal) step.
     if (place == Place::kInput && loc.amp.two_level_input) continue;
@@ -277,8 +286,7 @@ std::vector<Candidate> places_with_dominant(const std::vector<HypothesisFit>& si
   if (dist == singles.end() || dist->score < kDominantDisturbanceGainPct) return {};
   std::vector<Candidate> out;
   for (const auto& h : singles) {
-    if (h.effects.size() != 1 || kind_of(h.effects[0].effect) != EffectKind::kInputNonlinearity)
-      continue;
+    if (h.effects.size() != 1 || !several_places(h.effects[0].effect)) continue;
     if (!fitted(existing, h.effects[0], dist->effects[0]))
       out.push_back({{h.effects[0], dist->effects[0]}});
   }

@@ -1,10 +1,14 @@
 // dead_time: a dead time the model lacks (or has too much of), extra_delay_s added to the
-// baseline's. Seeded from the slope of the phase error.
+// baseline's. Seeded from the slope of the phase error. Also tried on the governor's error
+// (placement.hpp, "error"): a delay inside the loop (a fuel transport delay) changes the
+// loop's dynamics, not only the output's timing; it cannot be negative there.
 // Plant: engine.dead_time_s = Td0 + extra_delay_s, Td0 the effective fuel dead time
 // (dead_time_s if > 0, else 30/N + 60/(n N)).
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <cmath>
+#include <span>
 
 #include "rig/diagnose/diagnose.hpp"
 #include "rig/diagnose/effects/common.hpp"
@@ -25,8 +29,26 @@ void apply(model::TransferFunction& tf, const Params& p) {
   tf.delay_s = std::max(0.0, tf.delay_s + p[0]);
 }
 
+// On the error: e delayed by p[0] >= 0, interpolated linearly between samples (e held at its
+// first value before the record).
+double apply_on_error(const Params& p, std::span<const double> e, double, double dt_s) {
+  const double delay = std::max(0.0, p[0]) / dt_s;
+  const auto whole = static_cast<std::ptrdiff_t>(std::floor(delay));
+  const double frac = delay - static_cast<double>(whole);
+  const auto at = [&](std::ptrdiff_t back) {
+    const std::ptrdiff_t i = static_cast<std::ptrdiff_t>(e.size()) - 1 - back;
+    return e[static_cast<std::size_t>(std::max<std::ptrdiff_t>(i, 0))];
+  };
+  return (1.0 - frac) * at(whole) + frac * at(whole + 1);
+}
+
 std::string meaning(const AppliedEffect& e, const HypothesisFit&, const Problem& pr) {
   const auto& p = e.params;
+  if (e.place == Place::kError)
+    return fmt::format(
+        "a dead time of {:.0f} ms is missing inside the governor's loop (a transport delay "
+        "such as the fuel's: it slows the loop's response, not only the output's timing)",
+        1e3 * std::max(0.0, p[0]));
   return p[0] >= 0 ? fmt::format(
                          "a dead time of {:.0f} ms is missing (the recording's is {:.0f} ms, "
                          "the model's {:.0f} ms)",
@@ -59,6 +81,7 @@ const EffectModel kDeadTimeEffect{
     .parameter_specs = specs,
     .seeds = seeds,
     .apply_linear = apply,
+    .apply_on_error = apply_on_error,
     .explain = meaning,
     .map_to_plant = to_plant,
 };

@@ -4,6 +4,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <span>
 
 #include "rig/diagnose/blocks.hpp"
 #include "rig/diagnose/diagnose.hpp"
@@ -26,7 +27,8 @@ Eigen::VectorXd apply(const Problem&, const Params& p, Eigen::VectorXd v) {
   return deadband(v, p[0]);
 }
 
-double apply_sample(const Params& p, double v, double) {
+double apply_on_error(const Params& p, std::span<const double> e, double, double) {
+  const double v = e.back();
   return v > p[0] ? v - p[0] : v < -p[0] ? v + p[0] : 0.0;
 }
 
@@ -62,7 +64,7 @@ const EffectModel kDeadbandEffect{
     .parameter_specs = specs,
     .seeds = seeds,
     .apply_input = apply,
-    .apply_sample = apply_sample,
+    .apply_on_error = apply_on_error,
     .explain = meaning,
     .map_to_plant = to_plant,
 };

@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <span>
 
 #include "rig/diagnose/blocks.hpp"
 #include "rig/diagnose/diagnose.hpp"
@@ -31,7 +32,8 @@ Eigen::VectorXd apply(const Problem&, const Params& p, Eigen::VectorXd v) {
   return out + p[2] * v.cwiseMax(0.0);
 }
 
-double apply_sample(const Params& p, double v, double sigma) {
+double apply_on_error(const Params& p, std::span<const double> e, double sigma, double) {
+  const double v = e.back();
   const double s = sigma > 0.0 ? sigma : 1.0;
   return v + p[0] * v * v / s + p[1] * v * v * v / (s * s) + p[2] * std::max(v, 0.0);
 }
@@ -58,7 +60,7 @@ const EffectModel kStaticNonlinearityEffect{
     .parameter_specs = specs,
     .seeds = seeds,
     .apply_input = apply,
-    .apply_sample = apply_sample,
+    .apply_on_error = apply_on_error,
     .explain = meaning,
 };
 
