@@ -15,6 +15,8 @@
 #include "rig/diagnose/diagnose.hpp"
 #include "rig/diagnose/effect_registry.hpp"
 #include "rig/diagnose/placement.hpp"
+#include "rig/diagnose/report_out.hpp"
+#include "rig/model/model_file.hpp"
 
 namespace rig::diagnose {
 namespace {
@@ -161,6 +163,12 @@ TEST(ErrorLoop, ADeadTimeInTheLoopIsFoundOnTheError) {
   EXPECT_EQ(e.place, Place::kError) << r.explanation;
   EXPECT_NEAR(e.params[0], delay_s, 0.2 * delay_s) << r.explanation;
   EXPECT_NE(r.explanation.find("inside the governor's loop"), std::string::npos) << r.explanation;
+  // The augmented model keeps the delay out of its transfer function and says where it acts.
+  model::ModelFile base;
+  base.tf = in.model;
+  const model::ModelFile aug = augmented_model(r, base);
+  EXPECT_EQ(aug.tf.delay_s, in.model.delay_s);
+  EXPECT_EQ(aug.extra["augmentation"][0]["acts"], place_acts(Place::kError));
 }
 
 }  // namespace
