@@ -102,6 +102,7 @@ DiagnoseResult diagnose(const DiagnoseInput& in, const DiagnoseOptions& o) {
   } else {
     r.verdict = r.chosen() ? verdict_of(*r.chosen()) : "unexplained";
   }
+  r.alternative_index = close_alternative(r);
   r.explanation = explain(r);
   r.elapsed_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return r;

@@ -55,6 +55,8 @@ struct DiagnoseResult {
   double elapsed_s = 0.0;
   const HypothesisFit* chosen() const;  // the hypothesis behind the verdict, if any
   int chosen_index = -1;
+  // A hypothesis naming another effect that fits about as well (verdict.hpp), -1 for none.
+  int alternative_index = -1;
 };
 
 // Throws std::invalid_argument (one line) for mismatched lengths, non-finite samples,

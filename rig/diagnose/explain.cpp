@@ -131,6 +131,27 @@ std::string negligible_disturbance(const DiagnoseResult& r) {
       h.validation_fit_before, h.validation_fit_after);
 }
 
+// Another explanation that fits about as well (verdict.hpp close_alternative), if any.
+std::string alternative_words(const DiagnoseResult& r) {
+  if (r.alternative_index < 0) return "";
+  const HypothesisFit& g = r.hypotheses[static_cast<std::size_t>(r.alternative_index)];
+  std::string names;
+  for (const auto& e : g.effects) {
+    if (kind_of(e.effect) == EffectKind::kDisturbance) continue;
+    if (!names.empty()) names += " with ";
+    names += std::string(to_string(e.effect)) + place_suffix(e.place);
+  }
+  std::string s = fmt::format(
+      " A {} fits about as well (validation score {:.2f} against {:.2f}): this recording does "
+      "not tell the two apart.",
+      names, g.score, r.chosen()->score);
+  if (r.location.amp.two_level_input)
+    s += " On a two-level input every step is the same size, so a deadband, a play or a slew "
+         "limit in the loop acts much as a gain or a lag would; a test whose bias varies in "
+         "amplitude (Gaussian or shaped) can tell them apart.";
+  return s;
+}
+
 }  // namespace
 
 std::string explain(const DiagnoseResult& r) {
@@ -183,7 +204,7 @@ std::string explain(const DiagnoseResult& r) {
       "Diagnosis: {}. Adding it raises the validation fit from {:.1f} % to {:.1f} % "
       "(estimation {:.1f} % to {:.1f} %).",
       what, h->validation_fit_before, h->validation_fit_after, h->fit_before, h->fit_after);
-  return s;
+  return s + alternative_words(r);
 }
 
 }  // namespace rig::diagnose

@@ -129,6 +129,7 @@ nlohmann::json report_json(const DiagnoseResult& r, const ReportContext& c) {
           {"verdict", r.verdict},
           {"explanation", r.explanation},
           {"chosen", r.chosen_index >= 0 ? json(r.chosen_index) : json(nullptr)},
+          {"alternative", r.alternative_index >= 0 ? json(r.alternative_index) : json(nullptr)},
           {"hypotheses", hyps},
           {"location", location_json(r)},
           {"fit_before", number_or_null(r.fit_before_pct)},

@@ -24,6 +24,10 @@ inline constexpr double kPenaltyPctPerParameter = 0.25;
 // 60 ms combustion lag gave its best placed play 0.67 points over the lag, while deadbands
 // and plays beat the best linear effect by 0.86 points or more.
 inline constexpr double kNonlinearOverLinearPct = 0.75;
+// Another explanation within this many points of the verdict's score is named beside it in
+// the explanation (report.json "alternative"): the margin a nonlinearity needs over a linear
+// effect, below which the data do not tell two shapes apart.
+inline constexpr double kCloseAlternativePct = kNonlinearOverLinearPct;
 
 // An effect that contains a simpler one as a special case (EffectModel::generalises:
 // hysteresis, a play at shape_ratio 1) is named only when it scores this much more than the

@@ -169,6 +169,26 @@ int choose(const DiagnoseResult& r, double min_gain) {
   return drift_immaterial && single >= 0 ? single : i;
 }
 
+int close_alternative(const DiagnoseResult& r) {
+  const HypothesisFit* h = r.chosen();
+  if (!h) return -1;
+  const auto family = [](const std::string& word) {
+    if (word == "sensor_lag") return std::string("extra_lag");
+    if (word == "hysteresis") return std::string("backlash");
+    return word;
+  };
+  const std::string word = family(verdict_of(*h));
+  for (std::size_t j = 0; j < r.hypotheses.size(); ++j) {
+    const auto& g = r.hypotheses[j];
+    if (g.score < h->score - thresholds::kCloseAlternativePct) break;  // ranked
+    if (static_cast<int>(j) == r.chosen_index || !has_input_side(g) ||
+        family(verdict_of(g)) == word || !could_be_verdict(g, r.location, r.problem.scales))
+      continue;
+    return static_cast<int>(j);
+  }
+  return -1;
+}
+
 // The verdict word of a chosen hypothesis: its input-side effect (the first listed, pairs
 // keep the better single first), else its disturbance.
 std::string verdict_of(const HypothesisFit& h) {

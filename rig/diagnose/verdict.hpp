@@ -21,6 +21,11 @@ bool could_be_verdict(const HypothesisFit& h, const Location& location, const Da
 // The index of the chosen hypothesis in r.hypotheses (ranked), -1 for none.
 int choose(const DiagnoseResult& r, double min_gain_pct);
 
+// The best hypothesis that names another effect, could be a verdict and scores within
+// kCloseAlternativePct of the chosen one (or more, when a margin rule chose): the data do
+// not tell the two apart. -1 for none. The lag twins and a hysteresis with its play are one.
+int close_alternative(const DiagnoseResult& r);
+
 // The verdict word of a chosen hypothesis.
 std::string verdict_of(const HypothesisFit& h);
 

@@ -4,7 +4,7 @@ from plantsim, each judged detectable or not by the oracle, diagnosed by the rig
 
     /usr/bin/python3 tests/bench/gensim/run_bench.py --rig build/bin/rig [--seed 1]
         [--quick] [--plant-bench build/bin/bench_diagnose_plant] [--plant-seeds 2]
-        [--out DIR] [--json results.json]
+        [--out DIR] [--json results.json] [--excitation prbs]
 
 Prints every case (id, truth, concealment, oracle, verdict, parameter error, validation fit),
 the confusion matrix per effect and per concealment, the share right among detectable
@@ -78,15 +78,17 @@ def param_errors(case, report):
     return out
 
 
-def simulated_case(spec, d, reuse):
+def simulated_case(spec, d, reuse, excitation="gaussian"):
     """The case's recording in d and its oracle verdict: simulated, or with reuse read back
     from an earlier run's d (the same case list: same --seed)."""
     cached = os.path.join(d, "oracle.json")
     if reuse and os.path.exists(cached):
         truth = json.load(open(os.path.join(d, "truth.json")))
-        if truth.get("seed") == spec["seed"] and truth.get("effect") == spec["effect"]:
+        if (truth.get("seed") == spec["seed"] and truth.get("effect") == spec["effect"]
+                and truth.get("excitation", "gaussian") == excitation):
             return dict(truths=truth["truths"]), json.load(open(cached)), 0.0
-    case = cs.make_case(spec["id"], spec["effect"], spec["size"], spec["concealment"], spec["seed"])
+    case = cs.make_case(spec["id"], spec["effect"], spec["size"], spec["concealment"], spec["seed"],
+                        excitation)
     p, p_after, _ = oracle.plan(case)
     t0 = time.time()
     sim = g.simulate(case["u"], p, seed=case["seed"], onset_s=case["onset_s"], p_after=p_after)
@@ -98,9 +100,9 @@ def simulated_case(spec, d, reuse):
     return case, orc, sim_s
 
 
-def run_case(spec, rig, work, reuse=False):
+def run_case(spec, rig, work, reuse=False, excitation="gaussian"):
     d = os.path.join(work, spec["id"])
-    case, orc, sim_s = simulated_case(spec, d, reuse)
+    case, orc, sim_s = simulated_case(spec, d, reuse, excitation)
     t0 = time.time()
     proc = subprocess.run(["nice", "-n", "10", rig, "diagnose", "--recording",
                            os.path.join(d, "recording.csv"), "--model",
@@ -223,6 +225,8 @@ def main():
                     help="reuse the recordings and oracle verdicts an earlier run left in --out "
                          "(same --seed): only `rig diagnose` runs")
     ap.add_argument("--rescore", help="tabulate an earlier results.json again, run nothing")
+    ap.add_argument("--excitation", default="gaussian", choices=("gaussian", "prbs"),
+                    help="the bias: the rig's Gaussian one, or a PRBS of the same rms (cases.py)")
     a = ap.parse_args()
     if a.rescore:
         doc = json.load(open(a.rescore))
@@ -235,13 +239,14 @@ def main():
     specs = cs.case_list(a.seed, quick=a.quick)
     if a.only:
         specs = [s for s in specs if a.only in s["effect"].split("+") or a.only == s["effect"]]
-    print(f"gensim benchmark: seed {a.seed}, {len(specs)} cases of {cs.DURATION_S:.0f} s at "
+    print(f"gensim benchmark: seed {a.seed}, {a.excitation} bias, {len(specs)} cases of "
+          f"{cs.DURATION_S:.0f} s at "
           f"{1 / g.DT:.0f} Hz, rig {a.rig}; oracle: gain >= {oracle.MIN_GAIN} points and "
           f"F test p < {oracle.ALPHA}")
     t_start = time.time()
     rows = []
     for spec in specs:
-        r = run_case(spec, a.rig, a.out, a.reuse)
+        r = run_case(spec, a.rig, a.out, a.reuse, a.excitation)
         o = r["oracle"]
         errs = " ".join(f"{k} {v:+.1f}%" for k, v in r.get("param_err_pct", {}).items())
         vb, va = r.get("vfit_before"), r.get("vfit_after")

@@ -16,6 +16,7 @@
 #include "rig/diagnose/effect_registry.hpp"
 #include "rig/diagnose/placement.hpp"
 #include "rig/diagnose/report_out.hpp"
+#include "rig/diagnose/verdict.hpp"
 #include "rig/model/model_file.hpp"
 
 namespace rig::diagnose {
@@ -23,6 +24,7 @@ namespace {
 
 using test::null_record;
 using test::rms;
+using test::two_level;
 using test::white;
 
 // A governor loop that tracks the bias: L = k / (s (1 + s T)) with unity feedback, so the
@@ -125,6 +127,28 @@ TEST(ErrorLoop, AGovernorErrorDeadbandIsFoundOnTheError) {
   EXPECT_EQ(e.place, Place::kError) << r.explanation;
   EXPECT_NEAR(e.params[0], w, 0.2 * w) << r.explanation;
   EXPECT_NE(r.explanation.find("the governor holds its output"), std::string::npos)
+      << r.explanation;
+}
+
+// On a two-level input a governor's error deadband shortens every (equal) step alike, as a
+// gain would: whichever is named, the other is named beside it as fitting about as well.
+TEST(ErrorLoop, OnATwoLevelInputADeadbandAndAGainAreNamedTogether) {
+  DiagnoseInput in = null_record(67);
+  in.model = closed_loop();
+  in.u = two_level(in.u.size(), 67);
+  const Eigen::VectorXd e0 = in.u - model::simulate(in.model, in.u, in.dt_s);
+  const double w = 0.4 * rms(e0);
+  const Eigen::VectorXd y = integrated_loop(in.u, in.dt_s, [w](double e) {
+    return e > w ? e - w : e < -w ? e + w : 0.0;
+  });
+  in.y = y + white(y.size(), 0.1 * rms(y), 19);
+  const DiagnoseResult r = diagnose(in);
+  ASSERT_TRUE(r.verdict == "deadband" || r.verdict == "gain_change") << r.explanation;
+  ASSERT_GE(r.alternative_index, 0) << r.explanation;
+  const std::string other = verdict_of(r.hypotheses[static_cast<std::size_t>(r.alternative_index)]);
+  EXPECT_EQ(other, r.verdict == "deadband" ? "gain_change" : "deadband") << r.explanation;
+  EXPECT_NE(r.explanation.find("does not tell the two apart"), std::string::npos) << r.explanation;
+  EXPECT_NE(r.explanation.find("a test whose bias varies in amplitude"), std::string::npos)
       << r.explanation;
 }
 

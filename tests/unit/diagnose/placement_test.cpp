@@ -20,6 +20,7 @@ namespace {
 
 using test::null_record;
 using test::rms;
+using test::two_level;
 using test::white;
 
 TEST(Placement, RateLimitBehindTheGovernorsLagIsFoundInTheLoop) {
@@ -54,18 +55,6 @@ TEST(Placement, ADeadbandOnTheBiasIsAtTheInputAndTriedAtEachPlace) {
   EXPECT_EQ(places[static_cast<int>(Place::kOutput)], 1);
   EXPECT_EQ(places[static_cast<int>(Place::kFeedback)], 0);  // not tried in the feedback
   EXPECT_EQ(places[static_cast<int>(Place::kError)], 1);     // memoryless: on the error
-}
-
-// A PRBS-like bias: +-1 held for bits of 10 samples, each bit's sign random (seeded).
-Eigen::VectorXd two_level(Eigen::Index n, std::uint64_t seed) {
-  std::mt19937_64 rng(seed);
-  Eigen::VectorXd u(n);
-  double level = 1.0;
-  for (Eigen::Index k = 0; k < n; ++k) {
-    if (k % 10 == 0) level = (rng() & 1u) ? 1.0 : -1.0;
-    u(k) = level;
-  }
-  return u;
 }
 
 TEST(Placement, OnATwoLevelInputNothingIsFittedOnTheBiasItself) {

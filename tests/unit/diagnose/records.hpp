@@ -29,6 +29,18 @@ inline Eigen::VectorXd white(Eigen::Index n, double std, std::uint64_t seed) {
   return x;
 }
 
+// A PRBS-like bias: +-1 held for bits of 10 samples, each bit's sign random (seeded).
+inline Eigen::VectorXd two_level(Eigen::Index n, std::uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  Eigen::VectorXd u(n);
+  double level = 1.0;
+  for (Eigen::Index k = 0; k < n; ++k) {
+    if (k % 10 == 0) level = (rng() & 1u) ? 1.0 : -1.0;
+    u(k) = level;
+  }
+  return u;
+}
+
 inline double rms(const Eigen::VectorXd& x) {
   return std::sqrt((x.array() - x.mean()).square().mean());
 }
