@@ -30,6 +30,8 @@ struct Problem {
   // An abrupt step of the recorded level (an operating-point change) at this sample, fitted
   // as a second offset by every model, the baseline included; -1: none.
   Eigen::Index level_shift_at = -1;
+  // Where such a step was found and taken out of y (diagnose.cpp; level_shift_at is then -1).
+  Eigen::Index level_step_removed_at = -1;
   double y_level = 0.0;  // the recorded output's mean (the operating level, when it has one)
 };
 

@@ -27,6 +27,7 @@ ModelOutput locate_baseline(Problem& pr, DiagnoseResult& r) {
     // otherwise dominate the variance every fit percentage is taken of.
     const Eigen::Index n = pr.y.size();
     pr.y.tail(n - pr.level_shift_at).array() -= *step;
+    pr.level_step_removed_at = pr.level_shift_at;
     pr.level_shift_at = -1;
     base = model_output(pr, {});
   }

@@ -115,6 +115,20 @@ void refine_onsets(const Problem& pr, std::vector<HypothesisFit>& hs, const Eige
     HypothesisFit g = fit_hypothesis(gated, {h.effects}, base, fit);
     if (g.score > h.score) h = std::move(g);
   }
+  // A level step (find_level_shift) is also when a measurement gain with the operating level
+  // in it changed: the gain change is fitted from the step on too, whatever it scored over
+  // the whole record (where the half without it dilutes it below its parameter's worth).
+  const Eigen::Index step_at = std::max(pr.level_shift_at, pr.level_step_removed_at);
+  if (step_at <= 0) return;
+  const auto gain = std::find_if(hs.begin(), hs.end(), [](const HypothesisFit& h) {
+    return h.effects.size() == 1 && h.effects[0].effect == Effect::kGainChange;
+  });
+  if (gain == hs.end() || gain->yhat.size() != pr.y.size()) return;
+  Problem gated = pr;
+  gated.active_from = step_at;
+  gated.active_to = pr.y.size();
+  HypothesisFit g = fit_hypothesis(gated, {gain->effects}, base, fit);
+  if (g.score > gain->score) *gain = std::move(g);
 }
 
 }  // namespace rig::diagnose

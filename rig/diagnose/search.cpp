@@ -122,6 +122,7 @@ Problem decimated(const Problem& pr, int f) {
   out.active_from = pr.active_from / f;
   out.active_to = pr.active_to < 0 ? -1 : (pr.active_to + f - 1) / f;
   out.level_shift_at = pr.level_shift_at < 0 ? -1 : pr.level_shift_at / f;
+  out.level_step_removed_at = pr.level_step_removed_at < 0 ? -1 : pr.level_step_removed_at / f;
   finish_problem(out);
   return out;
 }

@@ -3,6 +3,7 @@
 #include "concealed.hpp"
 #include "records.hpp"
 #include "rig/diagnose/blocks.hpp"
+#include "rig/diagnose/diagnose.hpp"
 #include "rig/diagnose/split.hpp"
 
 namespace rig::diagnose {
@@ -89,6 +90,26 @@ TEST(Locate, AnEffectInTheSecondHalfIsSeenInThatHalf) {
     fired += locate(pn, model_output(pn, {}).yhat).half_dependent >= 0;
   }
   EXPECT_LE(fired, 1);
+}
+
+// A transducer gain that drops to 0.92 half-way on a power reading: the level steps by
+// (g - 1) x level, which is taken out, and the gain is fitted from the step on (over the
+// whole record the half without it dilutes it below its parameter's worth).
+TEST(Locate, AGainChangeWithTheLevelInItIsFittedFromTheLevelStep) {
+  DiagnoseInput in = test::null_record(71);
+  const Eigen::VectorXd z = model::simulate(in.model, in.u, in.dt_s);
+  const double level = 200.0 * test::rms(z), gain = 0.92;
+  const Eigen::Index n = z.size(), half = n / 2;
+  in.y = z.array() + level;
+  in.y.tail(n - half) *= gain;
+  in.y += test::white(n, 0.1 * test::rms(z), 23);
+  const DiagnoseResult r = diagnose(in);
+  ASSERT_TRUE(r.level_shift_time_s.has_value()) << r.explanation;
+  EXPECT_NEAR(*r.level_shift_time_s, static_cast<double>(half) * in.dt_s, 1.0);
+  ASSERT_EQ(r.verdict, "gain_change") << r.explanation;
+  const HypothesisFit& h = *r.chosen();
+  EXPECT_NEAR(h.effects.front().params[0], gain, 0.03) << r.explanation;
+  EXPECT_NEAR(static_cast<double>(h.active_from), static_cast<double>(half), 1.0 / in.dt_s);
 }
 
 }  // namespace
