@@ -64,7 +64,11 @@ void fit_output(const Problem& pr, std::span<const AppliedEffect> effects, const
     m.regressors(pr, e->params, x.middleCols(col, m.regressor_columns));
     col += m.regressor_columns;
   }
-  const Eigen::VectorXd sw = pr.est_weight.sqrt().matrix();
+  const OutputClip& clip = pr.output_clip;
+  const double clip_y = clip.level - pr.y_level;  // in pr.y's units
+  Eigen::VectorXd sw = pr.est_weight.sqrt().matrix();
+  if (clip.side != 0)  // the clipped samples say only that the output was beyond the clip
+    sw = ((pr.y.array() - clip_y).abs() > 1e-9 * std::abs(clip_y) + 1e-300).select(sw.array(), 0.0);
   const Eigen::VectorXd beta =
       (sw.asDiagonal() * x).colPivHouseholderQr().solve(sw.asDiagonal() * (pr.y - z));
   out.yhat = z + x * beta;
@@ -78,6 +82,8 @@ void fit_output(const Problem& pr, std::span<const AppliedEffect> effects, const
   for (const auto& e : effects)
     if (const auto after = effect_model(e.effect).after_fit)
       after(pr, e.params, out.yhat, out.derived);
+  if (clip.side > 0) out.yhat = out.yhat.cwiseMin(clip_y);
+  if (clip.side < 0) out.yhat = out.yhat.cwiseMax(clip_y);
 }
 
 }  // namespace

@@ -14,6 +14,16 @@
 
 namespace rig::diagnose {
 
+// The recorded output clipped at one end of its range (a sensor's range, a tank that
+// overflows): its extreme value piles up (thresholds.hpp kClipMinSamples, kClipPileRatio).
+struct OutputClip {
+  int side = 0;              // +1 clipped at the top, -1 at the bottom, 0 not clipped
+  double level = 0.0;        // where, in the recorded output's units
+  Eigen::Index samples = 0;  // how many samples sit there
+};
+// The clip of a recorded output y, if any (split.cpp).
+OutputClip find_output_clip(const Eigen::VectorXd& y);
+
 struct Problem {
   model::TransferFunction tf;  // the baseline model
   double dt_s = 0.01;
@@ -33,6 +43,9 @@ struct Problem {
   // Where such a step was found and taken out of y (diagnose.cpp; level_shift_at is then -1).
   Eigen::Index level_step_removed_at = -1;
   double y_level = 0.0;  // the recorded output's mean (the operating level, when it has one)
+  // Part of the measurement, as the output coupling is: every model's output is clipped at
+  // the recorded clip, whose samples the offset's fit leaves out (augmented_model.cpp).
+  OutputClip output_clip;
 };
 
 struct ModelOutput {

@@ -29,6 +29,7 @@ ModelOutput locate_baseline(Problem& pr, DiagnoseResult& r) {
     pr.y.tail(n - pr.level_shift_at).array() -= *step;
     pr.level_step_removed_at = pr.level_shift_at;
     pr.level_shift_at = -1;
+    pr.output_clip = {};  // its level no longer holds on both sides of the step
     base = model_output(pr, {});
   }
   r.baseline_yhat = base.yhat;
@@ -85,8 +86,7 @@ DiagnoseResult diagnose(const DiagnoseInput& in, const DiagnoseOptions& o) {
   }
   const ModelOutput base = locate_baseline(pr, r);
   gate_to_windows(pr, r.location);
-  if (r.location.input_mismatch || r.location.disturbance)
-    r.hypotheses = search_hypotheses(pr, r.location, base.yhat, o);
+  if (r.location.worth_searching()) r.hypotheses = search_hypotheses(pr, r.location, base.yhat, o);
   r.chosen_index = choose(r, o.min_gain_pct);
   // A verdict's parameters come from a full search, also when the procedure chose one the
   // screen ranked below the refined few.
@@ -97,8 +97,9 @@ DiagnoseResult diagnose(const DiagnoseInput& in, const DiagnoseOptions& o) {
     h.evaluations += screened;
   }
   if (r.chosen_index >= 0) keep_pair_estimate(r, base.yhat, o);
-  // A disturbance alone that no hypothesis makes worth its parameters is not material.
-  if (!r.location.input_mismatch && (!r.location.disturbance || !r.chosen())) {
+  // A disturbance alone (or a clip) that no hypothesis makes worth its parameters is not
+  // material.
+  if (!r.location.input_mismatch && (!r.location.worth_searching() || !r.chosen())) {
     r.verdict = "none";
   } else {
     r.verdict = r.chosen() ? verdict_of(*r.chosen()) : "unexplained";

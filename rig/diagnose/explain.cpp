@@ -113,6 +113,18 @@ std::string level_shift_words(const DiagnoseResult& r) {
 }
 
 // A disturbance the location found that no hypothesis makes worth its parameters.
+// A clipped output (Problem::output_clip) is a saturation at the output the rig compares
+// every model through; said first, as the level step is.
+std::string clip_words(const DiagnoseResult& r) {
+  const OutputClip& c = r.problem.output_clip;
+  if (c.side == 0) return "";
+  return fmt::format(
+      "The recorded output is clipped: {} samples sit at exactly {:.6g}, its {} value (a "
+      "saturation at the output: the end of the sensor's range, or a level held by an "
+      "overflow); every model's output is clipped there too. ",
+      c.samples, c.level, c.side > 0 ? "highest" : "lowest");
+}
+
 std::string negligible_disturbance(const DiagnoseResult& r) {
   if (!r.location.disturbance || r.hypotheses.empty()) return "";
   const HypothesisFit& h = r.hypotheses.front();
@@ -157,7 +169,7 @@ std::string alternative_words(const DiagnoseResult& r) {
 std::string explain(const DiagnoseResult& r) {
   const auto& t = r.location.tests;
   if (r.verdict == "none")
-    return level_shift_words(r) +
+    return level_shift_words(r) + clip_words(r) +
            fmt::format(
                "The model explains the recording within noise: fit {:.1f} % (validation {:.1f} %); "
                "the "
@@ -169,8 +181,8 @@ std::string explain(const DiagnoseResult& r) {
                "not depend on amplitude.",
                r.fit_before_pct, r.validation_fit_before_pct, t.cross_ratio, t.cross_threshold) +
            negligible_disturbance(r);
-  std::string s =
-      level_shift_words(r) + where_in_frequency(r.location) + where_in_time_and_level(r);
+  std::string s = level_shift_words(r) + clip_words(r) + where_in_frequency(r.location) +
+                  where_in_time_and_level(r);
   if (!t.independent)
     s += fmt::format(
         "The residual is correlated with the input (peak {:.1f} times the 99 % bound at a lag "

@@ -141,6 +141,7 @@ Location locate(const Problem& pr, const Eigen::VectorXd& yhat) {
   loc.tests = residual_tests(r.tail(r.size() - from), pr.u.tail(r.size() - from), pr.dt_s, lags);
   test_halves(pr, r, from, lags, loc);
   loc.dist = locate_disturbances(pr, r, loc.freq);
+  loc.clip = pr.output_clip;
   loc.input_mismatch = input_tests_fail(loc);
   loc.disturbance = loc.dist.periodic || loc.dist.drift;
   if (loc.dist.drift && !loc.input_mismatch) look_behind_drift(pr, r, yhat, lags, loc);

@@ -98,9 +98,14 @@ struct Location {
   std::array<ResidualTests, 2> halves;
   int half_dependent = -1;  // the half (0, 1) whose residual is correlated with u; -1 none
   Disturbances dist;
+  // Problem::output_clip: the recording met a limit, so the plant left its linear range;
+  // every effect is tried, but none needs to be found (every model is clipped there too).
+  OutputClip clip;
   bool input_mismatch = false;  // frequency, cross-correlation or amplitude test failed
   bool behind_drift = false;    // ... only once the drift was taken out of the residual
   bool disturbance = false;
+  // Whether effects are searched for: a failed test, a disturbance or a clipped output.
+  bool worth_searching() const { return input_mismatch || disturbance || clip.side != 0; }
 };
 
 FrequencyLocation locate_frequency(const Problem& pr, const Eigen::VectorXd& residual);

@@ -107,6 +107,10 @@ json location_json(const DiagnoseResult& r) {
             {"line_ratio", loc.dist.line_ratio},
             {"drift", loc.dist.drift},
             {"drift_ratio", loc.dist.drift_ratio}}},
+          {"output_clip", loc.clip.side == 0 ? json(nullptr)
+                                             : json{{"side", loc.clip.side > 0 ? "top" : "bottom"},
+                                                    {"level", loc.clip.level},
+                                                    {"samples", loc.clip.samples}}},
           {"input_mismatch", loc.input_mismatch},
           {"input_tests_behind_drift", loc.behind_drift},
           {"coherence_threshold", loc.freq.coherence_threshold},
@@ -178,6 +182,9 @@ model::ModelFile augmented_model(const DiagnoseResult& r, const model::ModelFile
   m.extra["baseline"] = {{"num", report::to_json_array(baseline.tf.num)},
                          {"den", report::to_json_array(baseline.tf.den)},
                          {"delay_s", baseline.tf.delay_s}};
+  // The recorded output's clip, which the model's output is compared through (min/max).
+  if (const OutputClip& c = r.problem.output_clip; c.side != 0)
+    m.extra["output_clip"] = {{"side", c.side > 0 ? "top" : "bottom"}, {"level", c.level}};
   m.extra["diagnose_verdict"] = r.verdict;
   return m;
 }

@@ -199,7 +199,8 @@ std::vector<Effect> applicable(const Problem& pr, const Location& loc, const Dia
     if (e == Effect::kLoadDamping && !dominant_mode(pr.tf)) continue;
     if (e == Effect::kPeriodicDisturbance && !loc.dist.periodic) continue;
     if (e == Effect::kDrift && !loc.dist.drift) continue;
-    if (kind_of(e) != EffectKind::kDisturbance && !loc.input_mismatch) continue;
+    if (kind_of(e) != EffectKind::kDisturbance && !loc.input_mismatch && loc.clip.side == 0)
+      continue;
     out.push_back(e);
   }
   return out;

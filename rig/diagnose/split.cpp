@@ -8,7 +8,9 @@
 #include <stdexcept>
 #include <string>
 
+#include "rig/diagnose/thresholds.hpp"
 #include "rig/fra/h1.hpp"
+#include "rig/ident/quality.hpp"
 
 namespace rig::diagnose {
 
@@ -56,6 +58,18 @@ Eigen::Index warmup_samples(const DiagnoseInput& in) {
 
 }  // namespace
 
+OutputClip find_output_clip(const Eigen::VectorXd& y) {
+  using thresholds::kClipMinSamples, thresholds::kClipPileRatio;
+  const ident::ExtremePile p = ident::extreme_pile(y);
+  const auto piled = [](Eigen::Index n, Eigen::Index near) {
+    return n >= kClipMinSamples && static_cast<double>(n) >= kClipPileRatio * near;
+  };
+  const bool top = piled(p.at_hi, p.near_hi), bottom = piled(p.at_lo, p.near_lo);
+  if (p.hi == p.lo || (!top && !bottom)) return {};
+  if (top && (!bottom || p.at_hi >= p.at_lo)) return {+1, p.hi, p.at_hi};
+  return {-1, p.lo, p.at_lo};
+}
+
 Problem prepare_problem(const DiagnoseInput& in, int* blocks, Eigen::Index* warmup) {
   validate(in);
   Problem pr;
@@ -65,6 +79,7 @@ Problem prepare_problem(const DiagnoseInput& in, int* blocks, Eigen::Index* warm
   pr.u = in.u.array() - in.u.mean();
   pr.y = in.y.array() - in.y.mean();
   pr.y_level = in.y.mean();
+  pr.output_clip = find_output_clip(in.y);
   const Eigen::Index n = in.u.size(), w = warmup_samples(in);
   const int nb = n - w >= 8 * 128 ? 8 : 4;
   const Eigen::Index len = (n - w) / nb;

@@ -64,6 +64,16 @@ inline constexpr int kScreenMaxDecimation = 4;
 inline constexpr double kTwoLevelResolution = 0.01;
 inline constexpr double kTwoLevelShare = 0.95;
 
+// --- A clipped output (augmented_model.hpp OutputClip) ---
+// A sensor at the end of its range, or a level held by an overflow, records one value again
+// and again at the edge of the output's distribution. A measured, noisy signal repeats a
+// value only through its quantisation, and then less often towards its extremes; so the
+// output is clipped when its extreme value holds at least kClipMinSamples samples and
+// kClipPileRatio times as many as any of the next values inward (ident::extreme_pile). The
+// cascaded tanks: 47 and 37 samples at exactly 10.0 V, no value near it more than twice.
+inline constexpr Eigen::Index kClipMinSamples = 10;
+inline constexpr double kClipPileRatio = 4.0;
+
 // --- Pairs (diagnose.cpp) ---
 // Only the best input-side singles are paired with each other (every pair is a full fit).
 inline constexpr std::size_t kPairedInputSingles = 3;

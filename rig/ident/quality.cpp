@@ -9,6 +9,7 @@
 #include <cmath>
 #include <numbers>
 #include <stdexcept>
+#include <vector>
 
 namespace rig::ident {
 namespace {
@@ -84,11 +85,11 @@ void add(QualityReport& rep, std::string name, Severity sev, std::string msg, do
 
 void check_clipping(const VectorXd& x, const char* channel, const QualityOptions& o,
                     QualityReport& rep) {
-  const double hi = x.maxCoeff(), lo = x.minCoeff();
-  const double tol = 1e-9 * std::max(hi - lo, 1e-300);
+  const ExtremePile p = extreme_pile(x);
+  const double hi = p.hi, lo = p.lo;
   const double n = double(x.size());
-  const double f_hi = double((x.array() >= hi - tol).count()) / n;
-  const double f_lo = double((x.array() <= lo + tol).count()) / n;
+  const double f_hi = double(p.at_hi) / n;
+  const double f_lo = double(p.at_lo) / n;
   const double worst = std::max(f_hi, f_lo);
   rep.figures.emplace_back(std::string(channel) + "_clip_fraction", worst);
   // A two-level signal (PRBS) lives at its extremes by design.
@@ -101,6 +102,31 @@ void check_clipping(const VectorXd& x, const char* channel, const QualityOptions
                   f_hi >= f_lo ? hi : lo),
       worst, o.clip_warning);
 }
+
+}  // namespace
+
+ExtremePile extreme_pile(const VectorXd& x) {
+  ExtremePile p;
+  if (x.size() == 0) return p;
+  std::vector<double> v(x.data(), x.data() + x.size());
+  std::sort(v.begin(), v.end());
+  p.lo = v.front(), p.hi = v.back();
+  const double tol = 1e-9 * std::max(p.hi - p.lo, 1e-300);
+  std::vector<Index> runs;  // counts of the distinct values, ascending
+  for (std::size_t i = 0, j = 0; i < v.size(); i = j) {
+    while (j < v.size() && v[j] - v[i] <= tol) ++j;
+    runs.push_back(static_cast<Index>(j - i));
+  }
+  p.at_lo = runs.front(), p.at_hi = runs.back();
+  const std::size_t k = std::min(kExtremeNeighbours, runs.size() - 1);
+  for (std::size_t i = 1; i <= k; ++i) {
+    p.near_lo = std::max(p.near_lo, runs[i]);
+    p.near_hi = std::max(p.near_hi, runs[runs.size() - 1 - i]);
+  }
+  return p;
+}
+
+namespace {
 
 void check_sampling(double dt_s, const QualityOptions& o, QualityReport& rep) {
   const double ratio = o.jitter_max_s / dt_s;

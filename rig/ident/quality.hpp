@@ -82,6 +82,16 @@ struct QualityReport {
 };
 
 // u, y equally long (std::invalid_argument otherwise, or when shorter than the lag window).
+// The samples of x at its extremes (to 1e-9 of its range): how many sit at the maximum and
+// at the minimum, and the most that any of the next kExtremeNeighbours distinct values inward
+// holds (a clipped channel piles up at its extreme; a quantised one thins out towards it).
+inline constexpr std::size_t kExtremeNeighbours = 3;
+struct ExtremePile {
+  double hi = 0.0, lo = 0.0;
+  Eigen::Index at_hi = 0, at_lo = 0, near_hi = 0, near_lo = 0;
+};
+ExtremePile extreme_pile(const Eigen::VectorXd& x);
+
 QualityReport check_quality(const Eigen::VectorXd& u, const Eigen::VectorXd& y, double dt_s,
                             const QualityOptions& options);
 

@@ -1,5 +1,8 @@
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <vector>
+
 #include "concealed.hpp"
 #include "records.hpp"
 #include "rig/diagnose/blocks.hpp"
@@ -110,6 +113,48 @@ TEST(Locate, AGainChangeWithTheLevelInItIsFittedFromTheLevelStep) {
   const HypothesisFit& h = *r.chosen();
   EXPECT_NEAR(h.effects.front().params[0], gain, 0.03) << r.explanation;
   EXPECT_NEAR(static_cast<double>(h.active_from), static_cast<double>(half), 1.0 / in.dt_s);
+}
+
+// The value of y below which a fraction q of its samples lie.
+double quantile(const Eigen::VectorXd& y, double q) {
+  std::vector<double> v(y.data(), y.data() + y.size());
+  std::sort(v.begin(), v.end());
+  return v[static_cast<std::size_t>(q * static_cast<double>(v.size() - 1))];
+}
+
+// A sensor at the end of its range: the nominal record clipped at its 97th percentile. The
+// clip is found, every model (the baseline too) is compared through it, and the model that
+// made the record explains it: `none`, with the clip said.
+TEST(Locate, AClippedOutputIsFoundAndTheModelIsComparedThroughIt) {
+  DiagnoseInput in = test::null_record(31);
+  const double level = quantile(in.y, 0.97);
+  in.y = in.y.cwiseMin(level);
+  const DiagnoseResult r = diagnose(in);
+  EXPECT_EQ(r.problem.output_clip.side, +1);
+  EXPECT_EQ(r.problem.output_clip.level, level);
+  EXPECT_NEAR(static_cast<double>(r.problem.output_clip.samples), 0.03 * in.y.size(), 2.0);
+  EXPECT_FALSE(r.location.input_mismatch);
+  EXPECT_LE(r.baseline_yhat.maxCoeff(), level - r.problem.y_level + 1e-9);
+  EXPECT_EQ(r.verdict, "none") << r.explanation;
+  EXPECT_NE(r.explanation.find("clipped"), std::string::npos) << r.explanation;
+}
+
+// A quantised output repeats values, least towards its extremes: not a clip. Clipped at the
+// bottom (a quantised transducer's floor), it is one.
+TEST(Locate, AQuantisedOutputIsNotClippedButOneAtItsFloorIs) {
+  const DiagnoseInput in = test::null_record(32);
+  EXPECT_EQ(find_output_clip(in.y).side, 0);
+  for (const double step_rms : {0.02, 0.25}) {
+    const double step = step_rms * test::rms(in.y);
+    const Eigen::VectorXd q = (in.y / step).array().round() * step;
+    EXPECT_EQ(find_output_clip(q).side, 0) << step_rms;
+  }
+  const double step = 0.02 * test::rms(in.y);
+  const Eigen::VectorXd q = (in.y / step).array().round() * step;
+  const double floor = quantile(q, 0.02);
+  const OutputClip c = find_output_clip(q.cwiseMax(floor));
+  EXPECT_EQ(c.side, -1);
+  EXPECT_EQ(c.level, floor);
 }
 
 }  // namespace
