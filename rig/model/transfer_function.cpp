@@ -88,8 +88,56 @@ TransferFunction monic(const TransferFunction& tf) {
   return out;
 }
 
-Eigen::MatrixXd filtered_derivatives(const Eigen::VectorXd& den_in, const Eigen::VectorXd& u,
-                                     double dt_s, double delay_s) {
+namespace {
+
+// One sample step of the state-variable filter as an affine map, x' = P x + G w, with
+// w = (v0, slope1, v1, slope2): the input's value and slope before the delayed knot inside
+// the step and after it (without a fractional delay the second pair is unused, G's columns
+// 2-3 zero). The two sub-steps of a fractional delay are folded into one: P = phi2 phi1.
+struct StepMap {
+  Eigen::MatrixXd p;  // n x n
+  Eigen::MatrixXd g;  // n x 4
+};
+
+StepMap step_map(const Eigen::MatrixXd& a, const Eigen::VectorXd& bin, double dt_s, double f) {
+  StepMap m;
+  const Eigen::Index n = a.rows();
+  m.g = Eigen::MatrixXd::Zero(n, 4);
+  if (f == 0.0) {
+    const FohStep full = foh_step(a, bin, dt_s);
+    m.p = full.phi;
+    m.g.col(0) = full.ga, m.g.col(1) = full.gb;
+    return m;
+  }
+  const FohStep s1 = foh_step(a, bin, f * dt_s), s2 = foh_step(a, bin, (1.0 - f) * dt_s);
+  m.p = s2.phi * s1.phi;
+  m.g.col(0) = s2.phi * s1.ga, m.g.col(1) = s2.phi * s1.gb;
+  m.g.col(2) = s2.ga, m.g.col(3) = s2.gb;
+  return m;
+}
+
+// The sample loop for a state of N (compile-time, or Eigen::Dynamic) entries: fixed sizes
+// let the n x n product unroll, which is most of diagnose's time.
+template <int N, class Input, class Sink>
+void run_steps(const StepMap& m, const Eigen::VectorXd& a0_in, Eigen::Index samples, Input&& w_at,
+               Sink&& sink) {
+  using Vec = Eigen::Matrix<double, N, 1>;
+  const Eigen::Matrix<double, N, N> p = m.p;
+  const Eigen::Matrix<double, N, 4> g = m.g;
+  const Vec a0 = a0_in;
+  Vec x = Vec::Zero(m.p.rows());
+  for (Eigen::Index k = 0; k < samples; ++k) {
+    const Eigen::Vector4d w = w_at(k);
+    sink(k, w(0) + a0.dot(x), x.data());  // p^n z = u - sum a_i p^i z
+    x = p * x + g * w;
+  }
+}
+
+// The state-variable filter z = u(t - Td) / A(p) stepped sample by sample; at each sample k
+// sink(k, top, x) receives p^n z (top) and the states x = [p^{n-1} z, ..., z] (n >= 1).
+template <class Sink>
+void step_filter(const Eigen::VectorXd& den_in, const Eigen::VectorXd& u, double dt_s,
+                 double delay_s, Sink&& sink) {
   if (!(dt_s > 0.0)) throw std::invalid_argument("simulate: dt_s must be > 0");
   if (!(delay_s >= 0.0)) throw std::invalid_argument("simulate: delay_s must be >= 0");
   // An empty, all-zero or non-finite denominator (a degenerate estimate) has no filter.
@@ -110,55 +158,64 @@ Eigen::MatrixXd filtered_derivatives(const Eigen::VectorXd& den_in, const Eigen:
     if (k - d < 0 || (f > 0.0 && k - d - 1 < 0)) return 0.0;
     return (1.0 - f) * u_at(k - d) + f * u_at(k - d - 1);
   };
-  Eigen::MatrixXd out(N, n + 1);
   if (n == 0) {
-    for (Eigen::Index k = 0; k < N; ++k) out(k, 0) = ud(k);
-    return out;
+    for (Eigen::Index k = 0; k < N; ++k) sink(k, ud(k), static_cast<const double*>(nullptr));
+    return;
   }
+  // w = (v0, slope1, v1, slope2) of step k (StepMap).
+  const auto w_at = [&](Eigen::Index k) {
+    const double v0 = ud(k);
+    // Left limit at t_{k+1}: the delayed input is still 0 there when it starts at t_{k+1}.
+    const double v2 = (f == 0.0 && k + 1 - d <= 0) ? 0.0 : ud(k + 1);
+    if (f == 0.0) return Eigen::Vector4d(v0, (v2 - v0) / dt_s, 0.0, 0.0);
+    // The delayed knot inside the step: left value (0 before the input starts), right value.
+    const double v1l = k - d - 1 < 0 ? 0.0 : u_at(k - d), v1 = u_at(k - d);
+    return Eigen::Vector4d(v0, (v1l - v0) / (f * dt_s), v1, (v2 - v1) / ((1.0 - f) * dt_s));
+  };
   // Controllable canonical form: x = [p^{n-1} z, ..., z], z = u / A(p).
   Eigen::MatrixXd a = Eigen::MatrixXd::Zero(n, n);
   a.row(0) = -den.tail(n).transpose();
   for (Eigen::Index i = 1; i < n; ++i) a(i, i - 1) = 1.0;
   Eigen::VectorXd bin = Eigen::VectorXd::Zero(n);
   bin(0) = 1.0;
-  const FohStep full = foh_step(a, bin, dt_s);
-  const FohStep s1 = f > 0 ? foh_step(a, bin, f * dt_s) : full;
-  const FohStep s2 = f > 0 ? foh_step(a, bin, (1.0 - f) * dt_s) : full;
-  // Plain loops over row-major copies: n <= ~8, so the per-sample cost is a few n^2
-  // multiply-adds and Eigen's dynamic-size overhead would dominate.
-  const auto rm = [](const Eigen::MatrixXd& m) {
-    return Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>(m);
-  };
-  const auto p_full = rm(full.phi), p1 = rm(s1.phi), p2 = rm(s2.phi);
-  std::vector<double> x(static_cast<size_t>(n), 0.0), t(static_cast<size_t>(n));
-  auto apply = [n](const auto& phi, const FohStep& st, const std::vector<double>& from,
-                   std::vector<double>& to, double v, double slope) {
-    for (Eigen::Index i = 0; i < n; ++i) {
-      double acc = st.ga(i) * v + st.gb(i) * slope;
-      for (Eigen::Index j = 0; j < n; ++j) acc += phi(i, j) * from[static_cast<size_t>(j)];
-      to[static_cast<size_t>(i)] = acc;
-    }
-  };
-  for (Eigen::Index k = 0; k < N; ++k) {
-    const double v0 = ud(k);
-    double top = v0;  // p^n z = u - sum a_i p^i z
-    for (Eigen::Index i = 0; i < n; ++i) {
-      top += a(0, i) * x[static_cast<size_t>(i)];
-      out(k, i + 1) = x[static_cast<size_t>(i)];
-    }
-    out(k, 0) = top;
-    // Left limit at t_{k+1}: the delayed input is still 0 there when it starts at t_{k+1}.
-    const double v2 = (f == 0.0 && k + 1 - d <= 0) ? 0.0 : ud(k + 1);
-    if (f == 0.0) {
-      apply(p_full, full, x, t, v0, (v2 - v0) / dt_s);
-      x.swap(t);
-    } else {
-      // The delayed knot inside the step: left value (0 before the input starts), right value.
-      const double v1l = k - d - 1 < 0 ? 0.0 : u_at(k - d), v1 = u_at(k - d);
-      apply(p1, s1, x, t, v0, (v1l - v0) / (f * dt_s));
-      apply(p2, s2, t, x, v1, (v2 - v1) / ((1.0 - f) * dt_s));
-    }
+  const StepMap m = step_map(a, bin, dt_s, f);
+  const Eigen::VectorXd a0 = a.row(0).transpose();
+  switch (n) {  // the orders diagnose and identify meet; larger ones run at dynamic size
+    case 1:
+      return run_steps<1>(m, a0, N, w_at, sink);
+    case 2:
+      return run_steps<2>(m, a0, N, w_at, sink);
+    case 3:
+      return run_steps<3>(m, a0, N, w_at, sink);
+    case 4:
+      return run_steps<4>(m, a0, N, w_at, sink);
+    case 5:
+      return run_steps<5>(m, a0, N, w_at, sink);
+    case 6:
+      return run_steps<6>(m, a0, N, w_at, sink);
+    case 7:
+      return run_steps<7>(m, a0, N, w_at, sink);
+    case 8:
+      return run_steps<8>(m, a0, N, w_at, sink);
+    case 9:
+      return run_steps<9>(m, a0, N, w_at, sink);
+    case 10:
+      return run_steps<10>(m, a0, N, w_at, sink);
+    default:
+      return run_steps<Eigen::Dynamic>(m, a0, N, w_at, sink);
   }
+}
+
+}  // namespace
+
+Eigen::MatrixXd filtered_derivatives(const Eigen::VectorXd& den, const Eigen::VectorXd& u,
+                                     double dt_s, double delay_s) {
+  const Eigen::Index n = std::max<Eigen::Index>(trim_leading_zeros(den).size() - 1, 0);
+  Eigen::MatrixXd out(u.size(), n + 1);
+  step_filter(den, u, dt_s, delay_s, [&](Eigen::Index k, double top, const double* x) {
+    out(k, 0) = top;
+    for (Eigen::Index i = 0; i < n; ++i) out(k, i + 1) = x[i];
+  });
   return out;
 }
 
@@ -191,9 +248,17 @@ Eigen::VectorXd simulate(const TransferFunction& tf_in, const Eigen::VectorXd& u
   const TransferFunction tf = monic(tf_in);
   const Eigen::Index n = tf.den.size() - 1;
   // y = B(p) z with z = u(t - Td) / A(p): numerator padded to n+1 terms.
-  Eigen::VectorXd b = Eigen::VectorXd::Zero(n + 1);
-  b.tail(tf.num.size()) = tf.num;
-  return filtered_derivatives(tf.den, u, dt_s, tf.delay_s) * b;
+  std::vector<double> b(static_cast<size_t>(n + 1), 0.0);
+  for (Eigen::Index i = 0; i < tf.num.size(); ++i)
+    b[static_cast<size_t>(n + 1 - tf.num.size() + i)] = tf.num(i);
+  // y_k = b_0 p^n z + sum b_{i+1} x_i, summed as the filter steps (no n+1 columns stored).
+  Eigen::VectorXd y(u.size());
+  step_filter(tf.den, u, dt_s, tf.delay_s, [&](Eigen::Index k, double top, const double* x) {
+    double acc = b[0] * top;
+    for (Eigen::Index i = 0; i < n; ++i) acc += b[static_cast<size_t>(i + 1)] * x[i];
+    y(k) = acc;
+  });
+  return y;
 }
 
 namespace {
