@@ -133,6 +133,21 @@ void run_steps(const StepMap& m, const Eigen::VectorXd& a0_in, Eigen::Index samp
   }
 }
 
+// The orders diagnose and identify meet run at a fixed size; larger ones at dynamic size.
+inline constexpr int kMaxFixedOrder = 10;
+
+template <int N, class Input, class Sink>
+void run_sized(Eigen::Index n, const StepMap& m, const Eigen::VectorXd& a0, Eigen::Index samples,
+               Input&& w_at, Sink&& sink) {
+  if constexpr (N > kMaxFixedOrder) {
+    run_steps<Eigen::Dynamic>(m, a0, samples, w_at, sink);
+  } else if (n == N) {
+    run_steps<N>(m, a0, samples, w_at, sink);
+  } else {
+    run_sized<N + 1>(n, m, a0, samples, w_at, sink);
+  }
+}
+
 // The state-variable filter z = u(t - Td) / A(p) stepped sample by sample; at each sample k
 // sink(k, top, x) receives p^n z (top) and the states x = [p^{n-1} z, ..., z] (n >= 1).
 template <class Sink>
@@ -180,30 +195,7 @@ void step_filter(const Eigen::VectorXd& den_in, const Eigen::VectorXd& u, double
   bin(0) = 1.0;
   const StepMap m = step_map(a, bin, dt_s, f);
   const Eigen::VectorXd a0 = a.row(0).transpose();
-  switch (n) {  // the orders diagnose and identify meet; larger ones run at dynamic size
-    case 1:
-      return run_steps<1>(m, a0, N, w_at, sink);
-    case 2:
-      return run_steps<2>(m, a0, N, w_at, sink);
-    case 3:
-      return run_steps<3>(m, a0, N, w_at, sink);
-    case 4:
-      return run_steps<4>(m, a0, N, w_at, sink);
-    case 5:
-      return run_steps<5>(m, a0, N, w_at, sink);
-    case 6:
-      return run_steps<6>(m, a0, N, w_at, sink);
-    case 7:
-      return run_steps<7>(m, a0, N, w_at, sink);
-    case 8:
-      return run_steps<8>(m, a0, N, w_at, sink);
-    case 9:
-      return run_steps<9>(m, a0, N, w_at, sink);
-    case 10:
-      return run_steps<10>(m, a0, N, w_at, sink);
-    default:
-      return run_steps<Eigen::Dynamic>(m, a0, N, w_at, sink);
-  }
+  run_sized<1>(n, m, a0, N, w_at, sink);
 }
 
 }  // namespace
