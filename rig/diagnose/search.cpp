@@ -4,6 +4,7 @@
 #include <atomic>
 #include <cmath>
 #include <numbers>
+#include <optional>
 #include <thread>
 #include <type_traits>
 
@@ -206,10 +207,25 @@ std::vector<Effect> applicable(const Problem& pr, const Location& loc, const Dia
   return out;
 }
 
+// The pair a + b started from both singles' fits and from b's own starting points at its
+// place, seeded from `left`, the location of what a leaves (b's single may have taken a's part
+// as well: a dead time the lag of a slew limit, a limit fitted without the drift beside it).
+Candidate pair_starts(const AppliedEffect& a, const AppliedEffect& b, const Problem& pr,
+                      const Location& left, bool b_first = false) {
+  Candidate c;
+  const auto add = [&](const AppliedEffect& x) {
+    c.push_back(b_first ? std::vector<AppliedEffect>{x, a} : std::vector<AppliedEffect>{a, x});
+  };
+  add(b);
+  for (auto& start : placed_starts(b.effect, b.place, pr, left)) add(start.front());
+  return c;
+}
+
 // Pairs of the best input-side singles (the best place of each effect), and of those with a
 // detected disturbance; every input-side effect with a disturbance that dominates the
 // residual (its single's score, fitted without it, says little then).
-std::vector<Candidate> pair_candidates(const std::vector<HypothesisFit>& singles) {
+std::vector<Candidate> pair_candidates(const Problem& pr,
+                                       const std::vector<HypothesisFit>& singles) {
   std::vector<const HypothesisFit*> inputs, dists;  // singles are ranked
   for (const auto& h : singles) {
     if (!has_input_side(h)) {
@@ -222,6 +238,7 @@ std::vector<Candidate> pair_candidates(const std::vector<HypothesisFit>& singles
     if (!seen) inputs.push_back(&h);
   }
   const bool dominant = !dists.empty() && dists.front()->score >= kDominantDisturbanceGainPct;
+  std::vector<std::optional<Location>> left(dists.size());
   const auto lag = [](Effect e) { return e == Effect::kExtraLag || e == Effect::kSensorLag; };
   std::vector<Candidate> out;
   for (std::size_t i = 0; i < inputs.size(); ++i) {
@@ -232,9 +249,11 @@ std::vector<Candidate> pair_candidates(const std::vector<HypothesisFit>& singles
       if (!pairable(a, b)) continue;  // one front lag, one feedback path, one error loop
       out.push_back({{a, b}});
     }
-    for (std::size_t j = 0; j < dists.size(); ++j)
-      if ((i < kPairedWithDisturbance) || (dominant && j == 0))
-        out.push_back({{a, dists[j]->effects[0]}});
+    for (std::size_t j = 0; j < dists.size(); ++j) {
+      if (i >= kPairedWithDisturbance && !(dominant && j == 0)) continue;
+      if (!left[j]) left[j] = locate(pr, dists[j]->yhat);  // a was fitted without it
+      out.push_back(pair_starts(dists[j]->effects[0], a, pr, *left[j], true));
+    }
   }
   return out;
 }
@@ -265,14 +284,17 @@ std::vector<Candidate> forward_pairs(const Problem& pr, const std::vector<Hypoth
     });
     if (first == singles.end()) continue;
     const AppliedEffect& a = first->effects[0];
+    const Location after_a = locate(pr, first->yhat);
     std::vector<Effect> seen{a.effect};
-    for (const auto& h : singles) {
+    for (const auto& h : singles) {  // ranked: each effect's best place that can pair with a
       if (h.effects.size() != 1 || !has_input_side(h)) continue;
       const AppliedEffect& b = h.effects[0];
       if (std::find(seen.begin(), seen.end(), b.effect) != seen.end()) continue;
+      if (lag(a.effect) && lag(b.effect)) continue;
+      if (!pairable(a, b)) continue;  // its next place may pair (a dead time in the error loop)
       seen.push_back(b.effect);
-      if ((lag(a.effect) && lag(b.effect)) || !pairable(a, b)) continue;
-      if (!fitted(existing, a, b) && !fitted(out, a, b)) out.push_back({{a, b}});
+      if (fitted(existing, a, b) || fitted(out, a, b)) continue;
+      out.push_back(pair_starts(a, b, pr, after_a));
     }
   }
   return out;
@@ -281,16 +303,18 @@ std::vector<Candidate> forward_pairs(const Problem& pr, const std::vector<Hypoth
 // When a disturbance dominates the residual, each input-side nonlinearity was placed (its
 // best place ranked) without it: every other place of it is paired with that disturbance
 // too, screened as the forward pairs are (a governor's error deadband behind a drift).
-std::vector<Candidate> places_with_dominant(const std::vector<HypothesisFit>& singles,
+std::vector<Candidate> places_with_dominant(const Problem& pr,
+                                            const std::vector<HypothesisFit>& singles,
                                             const std::vector<Candidate>& existing) {
   const auto dist = std::find_if(singles.begin(), singles.end(),
                                  [](const HypothesisFit& h) { return !has_input_side(h); });
   if (dist == singles.end() || dist->score < kDominantDisturbanceGainPct) return {};
+  const Location left = locate(pr, dist->yhat);
   std::vector<Candidate> out;
   for (const auto& h : singles) {
     if (h.effects.size() != 1 || !several_places(h.effects[0].effect)) continue;
     if (!fitted(existing, h.effects[0], dist->effects[0]))
-      out.push_back({{h.effects[0], dist->effects[0]}});
+      out.push_back(pair_starts(dist->effects[0], h.effects[0], pr, left, true));
   }
   return out;
 }
@@ -317,7 +341,7 @@ std::vector<HypothesisFit> search_hypotheses(const Problem& pr, const Location& 
   add_sensor_lag_twin(pr, hs, o.fit);
   rank(hs);
   if (!o.try_pairs || hs.empty() || explains(pr, hs.front(), loc)) return hs;
-  const std::vector<Candidate> paired = pair_candidates(hs);
+  const std::vector<Candidate> paired = pair_candidates(pr, hs);
   std::vector<HypothesisFit> pairs = fit_all(pr, paired, base, o);
   std::vector<Candidate> tried = paired;
   for (auto& c : forward_pairs(pr, hs, paired, loc)) tried.push_back(std::move(c));
@@ -326,7 +350,7 @@ std::vector<HypothesisFit> search_hypotheses(const Problem& pr, const Location& 
            kRefinedForwardPairs))
     pairs.push_back(std::move(h));
   for (auto& h :
-       screen_and_refine(pr, places_with_dominant(hs, tried), base, o, kRefinedDominantPlaces))
+       screen_and_refine(pr, places_with_dominant(pr, hs, tried), base, o, kRefinedDominantPlaces))
     pairs.push_back(std::move(h));
   for (auto& h : pairs) hs.push_back(std::move(h));
   rank(hs);

@@ -1,0 +1,83 @@
+#!/usr/bin/python3
+"""`rig diagnose` on a few concealed cases from gensim (tests/bench/gensim), the genset
+simulator written apart from plantsim: each case is simulated from its seed, diagnosed by
+the rig binary, and judged against gensim's own truth.
+
+    RIG_BIN_DIR=build/bin /usr/bin/python3 tests/integration/diagnose/gensim_cases_test.py
+
+The full benchmark (83 cases per seed, with the oracle) is tests/bench/gensim/run_bench.py;
+these are the cases that pin a fixed behaviour:
+  * an actuator slew limit behind a 12 kW transducer drift (benchmark seed 1, g022): its
+    pair with the drift must start from the limit's own seeds, not only from its single's
+    fit made without the drift (which stopped at a 2 s front lag and was out-scored by a
+    damping change);
+  * a fuel dead time (benchmark seed 1, g000): a linear effect, as a guard;
+  * a null case with the set's operating nuisances (benchmark seed 1, g082): `none`.
+"""
+import json
+import os
+import subprocess
+import sys
+import tempfile
+import unittest
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+sys.path.insert(0, os.path.join(HERE, "..", "..", "bench", "gensim"))
+import cases as cs  # noqa: E402
+import genset as g  # noqa: E402
+
+PARAM_TOL = 0.20  # the issue's "parameter within 20 %"
+
+
+def rig() -> str:
+    return os.path.join(os.environ.get("RIG_BIN_DIR", "build/bin"), "rig")
+
+
+def diagnose_case(effect, size, concealment, seed, work):
+    """Simulates the case into work/case, runs rig diagnose, returns (truths, report)."""
+    case = cs.make_case("test", effect, size, concealment, seed)
+    sim = g.simulate(case["u"], case["p"], seed=case["seed"], onset_s=case["onset_s"],
+                     p_after=case["p_after"])
+    d = os.path.join(work, "case")
+    cs.write_case(case, sim["y"][:, 0], d)
+    out = os.path.join(work, "diag")
+    proc = subprocess.run([rig(), "diagnose", "--recording", os.path.join(d, "recording.csv"),
+                           "--model", os.path.join(d, "model.json"), "--out", out],
+                          capture_output=True, text=True)
+    if proc.returncode != 0:
+        raise AssertionError(f"rig diagnose exit {proc.returncode}: {proc.stderr.strip()}")
+    with open(os.path.join(out, "report.json")) as f:
+        return case["truths"], json.load(f)
+
+
+class GensimCases(unittest.TestCase):
+    def run_case(self, *args):
+        with tempfile.TemporaryDirectory() as work:
+            truths, rep = diagnose_case(*args, work)
+        seed = args[3]
+        print(f"{args[0]} {args[2]} seed {seed}: verdict {rep['verdict']}", flush=True)
+        return truths, rep, seed
+
+    def test_slew_limit_behind_a_drift_is_a_rate_limit_in_the_loop(self):
+        truths, rep, seed = self.run_case("rate_limit", "large", "drift", 837884)
+        self.assertEqual(rep["verdict"], "rate_limit", f"seed {seed}: {rep['explanation']}")
+        h = rep["hypotheses"][rep["chosen"]]
+        limit = next(e for e in h["effects"] if e["effect"] == "rate_limit")
+        self.assertEqual(limit["place"], "in_loop", rep["explanation"])
+        self.assertIn("drift", [e["effect"] for e in h["effects"]], rep["explanation"])
+        truth = truths[0]["truth"]
+        got = limit["params"]["rate_limit_per_s"]
+        self.assertLess(abs(got - truth) / truth, PARAM_TOL, f"seed {seed}: {got} vs {truth}")
+        self.assertGreater(h["validation_fit_after"], h["validation_fit_before"])
+
+    def test_a_longer_fuel_dead_time_is_a_dead_time(self):
+        truths, rep, seed = self.run_case("dead_time", "large", "plain", 473189)
+        self.assertEqual(rep["verdict"], "dead_time", f"seed {seed}: {rep['explanation']}")
+
+    def test_operating_nuisances_alone_are_none(self):
+        _, rep, seed = self.run_case("none", "large", "nuisances", 770071)
+        self.assertEqual(rep["verdict"], "none", f"seed {seed}: {rep['explanation']}")
+
+
+if __name__ == "__main__":
+    unittest.main(verbosity=2)
