@@ -192,6 +192,23 @@ void apply_at_output(const Problem& pr, std::span<const AppliedEffect> effects,
       z = g0 * apply_input(pr, e, z / g0);
 }
 
+// N of the error loop's effect (error_loop.hpp): on the error itself, or after the PI.
+std::function<double(std::span<const double>)> error_effect(const Problem& pr,
+                                                            const AppliedEffect& err) {
+  const EffectModel& m = effect_model(err.effect);
+  if (err.place == Place::kPiLoop) {
+    const double ti_s = err.place_params.at(0), sigma = pr.scales.u_std;  // a: the bias's rms
+    const auto step = m.step;
+    return pi_loop_on_error([step, &p = err.params, sigma, dt_s = pr.dt_s](
+                                StepState& s, double x) { return step(p, s, x, sigma, dt_s); },
+                            pi_signal(pr, ti_s).k, ti_s, pr.dt_s);
+  }
+  const Eigen::VectorXd e0 = pr.u - pr.baseline_z / pr.scales.dc_gain;
+  const double sigma = std::sqrt((e0.array() - e0.mean()).square().mean());
+  return [on_error = m.apply_on_error, &p = err.params, sigma,
+          dt_s = pr.dt_s](std::span<const double> e) { return on_error(p, e, sigma, dt_s); };
+}
+
 }  // namespace
 
 ModelOutput model_output(const Problem& pr, std::span<const AppliedEffect> effects) {
@@ -208,9 +225,10 @@ ModelOutput model_output(const Problem& pr, std::span<const AppliedEffect> effec
     const EffectKind kind = kind_of(e.effect);
     input_side = input_side || kind != EffectKind::kDisturbance;
     feedback = feedback || kind == EffectKind::kFeedback;
-    if (e.place == Place::kError) {
-      if (err) throw std::invalid_argument("model_output: two effects on the error");
-      if (!effect_model(e.effect).apply_on_error)
+    if (e.place == Place::kError || e.place == Place::kPiLoop) {
+      if (err) throw std::invalid_argument("model_output: two effects in the error loop");
+      if (e.place == Place::kError ? !effect_model(e.effect).apply_on_error
+                                   : !effect_model(e.effect).step)
         throw std::invalid_argument(std::string("model_output: no form on the error for ") +
                                     to_string(e.effect));
       err = &e;
@@ -236,15 +254,8 @@ ModelOutput model_output(const Problem& pr, std::span<const AppliedEffect> effec
   } else {
     z = linear_output(pr, effects, out.tf, loop, v, feedback);
     if (fb) z = close_feedback(pr, effects, out.tf, loop, *fb, v, feedback, std::move(z));
-    if (err) {
-      // The loop tracks the bias as the input-placed effects left it (v).
-      const auto on_error = effect_model(err->effect).apply_on_error;
-      const Eigen::VectorXd e0 = pr.u - pr.baseline_z / s.dc_gain;
-      const double sigma = std::sqrt((e0.array() - e0.mean()).square().mean());
-      z = close_error_loop(out.tf, v, z, s.dc_gain, pr.dt_s, [&](std::span<const double> e) {
-        return on_error(err->params, e, sigma, pr.dt_s);
-      });
-    }
+    // The loop tracks the bias as the input-placed effects left it (v).
+    if (err) z = close_error_loop(out.tf, v, z, s.dc_gain, pr.dt_s, error_effect(pr, *err));
     apply_at_output(pr, effects, z);
     const Eigen::Index n = z.size();
     if (pr.active_from > 0) z.head(pr.active_from) = pr.baseline_z.head(pr.active_from);

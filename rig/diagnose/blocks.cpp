@@ -21,14 +21,17 @@ Eigen::VectorXd backlash(const Eigen::VectorXd& u, double b) {
   return v;
 }
 
+double bouc_wen_step(double z, double du, double w, double r) {
+  const double beta = 1.0 / (w * (1.0 + r)), gamma = r * beta;
+  z += du - beta * std::abs(du) * z - gamma * du * std::abs(z);
+  return std::clamp(z, -w, w);  // an increment larger than w would overshoot the envelope
+}
+
 Eigen::VectorXd bouc_wen(const Eigen::VectorXd& u, double w, double r) {
   Eigen::VectorXd v(u.size());
-  const double beta = 1.0 / (w * (1.0 + r)), gamma = r * beta;
   double z = 0.0;
   for (Eigen::Index k = 0; k < u.size(); ++k) {
-    const double du = k > 0 ? u(k) - u(k - 1) : 0.0;
-    z += du - beta * std::abs(du) * z - gamma * du * std::abs(z);
-    z = std::clamp(z, -w, w);  // an increment larger than w would overshoot the envelope
+    z = bouc_wen_step(z, k > 0 ? u(k) - u(k - 1) : 0.0, w, r);
     v(k) = u(k) - z;
   }
   return v;
@@ -49,6 +52,10 @@ Eigen::VectorXd rate_limit(const Eigen::VectorXd& u, double rate_per_s, double d
   return v;
 }
 
+double in_loop_recovery(double recovery_s, double dt_s) {
+  return std::min(1.0, dt_s / std::max(recovery_s, 1e-300));
+}
+
 namespace {
 
 // One step of the integrating loop: the input's increment plus the recovery of the lost
@@ -57,7 +64,7 @@ template <class Limit>
 Eigen::VectorXd in_loop(const Eigen::VectorXd& u, double recovery_s, double dt_s, Limit limit) {
   Eigen::VectorXd v(u.size());
   if (u.size() == 0) return v;
-  const double a = std::min(1.0, dt_s / std::max(recovery_s, 1e-300));
+  const double a = in_loop_recovery(recovery_s, dt_s);
   v(0) = limit(u(0), 0.0);
   for (Eigen::Index k = 1; k < u.size(); ++k)
     v(k) = limit(v(k - 1), u(k) - u(k - 1) + a * (u(k - 1) - v(k - 1)));

@@ -22,6 +22,8 @@ Eigen::VectorXd backlash(const Eigen::VectorXd& u, double half_width);
 // (r = 1: a play whose return is linear at once; r near -1: a slow, rounded engagement).
 // Rate-independent: each step applies the increment du_k = u_k - u_{k-1}; z_0 = 0.
 Eigen::VectorXd bouc_wen(const Eigen::VectorXd& u, double half_width, double shape_ratio);
+// One step of it: z after the increment du.
+double bouc_wen_step(double z, double du, double half_width, double shape_ratio);
 // Hard limits: v = min(max(u, lower), upper).
 Eigen::VectorXd saturate(const Eigen::VectorXd& u, double lower, double upper);
 // Rate limit r: v_k = v_{k-1} + clamp(u_k - v_{k-1}, -r dt, r dt), v_0 = u_0.
@@ -31,6 +33,8 @@ Eigen::VectorXd rate_limit(const Eigen::VectorXd& u, double rate_per_s, double d
 //   v_k = v_{k-1} + clamp(u_k - u_{k-1} + (u_{k-1} - v_{k-1}) dt/T, -r dt, r dt)   (rate)
 //   v_k = min(max(v_{k-1} + u_k - u_{k-1} + (u_{k-1} - v_{k-1}) dt/T, lower), upper)
 // T = dt gives the plain limiters above: the position is restored at once.
+// The share of the lost position restored in one step, dt/T (at most all of it).
+double in_loop_recovery(double recovery_s, double dt_s);
 Eigen::VectorXd rate_limit_in_loop(const Eigen::VectorXd& u, double rate_per_s, double recovery_s,
                                    double dt_s);
 Eigen::VectorXd saturate_in_loop(const Eigen::VectorXd& u, double lower, double upper,

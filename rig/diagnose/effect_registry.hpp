@@ -48,6 +48,16 @@ class PlantTarget {
   virtual void note(const std::string& text) = 0;
 };
 
+// The state of a nonlinearity stepped one sample at a time inside a closed loop
+// (Place::kPiLoop): its last input and output and its own memory, before the first sample
+// not started.
+struct StepState {
+  bool started = false;
+  double last_in = 0.0;
+  double last_out = 0.0;
+  double memory = 0.0;
+};
+
 // What a plant mapping is given: the fitted effect, its hypothesis (the derived values), the
 // model it was fitted against and the recorded input.
 struct PlantContext {
@@ -76,6 +86,10 @@ struct EffectModel {
   // deviation of the error (as apply_input measures its signal), dt_s its sample period.
   double (*apply_on_error)(const Params& p, std::span<const double> e, double sigma,
                            double dt_s) = nullptr;
+  // Its form stepped one sample at a time (the same map as apply_input, its state in s),
+  // when it has one: then it is also tried after the governor's PI, inside its loop
+  // (Place::kPiLoop). sigma: the standard deviation of its input, dt_s its sample period.
+  double (*step)(const Params& p, StepState& s, double x, double sigma, double dt_s) = nullptr;
   // Its terms of the output feedback (kFeedback).
   void (*feedback)(const Problem& problem, const Params& p, FeedbackTerms& terms) = nullptr;
   // A disturbance's part of the output's least-squares fit (augmented_model.cpp): columns

@@ -69,4 +69,34 @@ Eigen::VectorXd close_error_loop(const model::TransferFunction& tf_in, const Eig
   return y;
 }
 
+namespace {
+
+// The PI loop's sums and the nonlinearity's state after one sample.
+struct PiState {
+  double sum_e = 0.0;  // sum of e_j
+  double sum_d = 0.0;  // sum of d_j
+  StepState step;
+};
+
+}  // namespace
+
+std::function<double(std::span<const double>)> pi_loop_on_error(Stepper step, double k,
+                                                                double integral_time_s,
+                                                                double dt_s) {
+  const double r = dt_s / integral_time_s;
+  return [step = std::move(step), k, r, done = PiState{}, trial = PiState{},
+          at = std::size_t{0}](std::span<const double> e) mutable {
+    const std::size_t i = e.size() - 1;
+    if (i != at) done = trial, at = i;  // a new sample: the last one's trial stands
+    trial = done;
+    const double ek = e.back();
+    trial.sum_e += ek;
+    const double a = k * (ek + r * trial.sum_e);
+    const double lost = (a - step(trial.step, a)) / k;
+    const double d = (lost - r * done.sum_d) / (1.0 + r);  // d + r (sum_d + d) = lost
+    trial.sum_d += d;
+    return ek - d;
+  };
+}
+
 }  // namespace rig::diagnose

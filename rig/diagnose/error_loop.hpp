@@ -13,6 +13,7 @@
 #include <functional>
 #include <span>
 
+#include "rig/diagnose/effect_registry.hpp"
 #include "rig/model/transfer_function.hpp"
 
 namespace rig::diagnose {
@@ -25,5 +26,16 @@ namespace rig::diagnose {
 Eigen::VectorXd close_error_loop(const model::TransferFunction& tf, const Eigen::VectorXd& u,
                                  const Eigen::VectorXd& z0, double g0, double dt_s,
                                  const std::function<double(std::span<const double>)>& on_error);
+
+// N for close_error_loop when the nonlinearity sits after the governor's PI (placement.hpp,
+// pi_loop): a_k = k (e_k + (dt/T_i) sum_{j<=k} e_j), its output through `step` (the effect's
+// stepped form, state kept between samples), and the error that would have moved the PI's
+// output as N did, e_k - d_k with C d = (a - N(a)) / k solved sample by sample. A call for
+// the sample already being solved (close_error_loop's passes) starts again from the state
+// the previous sample left.
+using Stepper = std::function<double(StepState& state, double x)>;
+std::function<double(std::span<const double>)> pi_loop_on_error(Stepper step, double k,
+                                                                double integral_time_s,
+                                                                double dt_s);
 
 }  // namespace rig::diagnose

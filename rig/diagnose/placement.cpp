@@ -29,6 +29,10 @@ constexpr PlaceWords kPlaceWords[] = {
     {Place::kError, "error", " (on the loop's error)",
      "error: on e = u - y / G0 of a unity-feedback loop whose closed loop is the tf: "
      "y = tf (u - (e - N(e)))"},
+    {Place::kPiLoop, "pi_loop", " (after the governor's PI, in its loop)",
+     "after the PI of a unity-feedback loop whose closed loop is the tf: e = u - y / G0, "
+     "a = k (e + integral(e) / integral_time_s), y = tf (u - C^-1 (a - N(a)) / k), k from the "
+     "linear loop's a in the bias's rms"},
 };
 
 const PlaceWords& words(Place place) {
@@ -46,6 +50,8 @@ const char* place_acts(Place place) { return words(place).acts; }
 std::vector<ParamSpec> place_specs(Place place, const DataScales& s) {
   if (place == Place::kFeedback)
     return {{"feedback_gain", -thresholds::kFeedbackGainMax, thresholds::kFeedbackGainMax, false}};
+  if (place == Place::kPiLoop)
+    return {{"integral_time_s", thresholds::kPiIntegralMinS, thresholds::kPiIntegralMaxS, true}};
   if (place != Place::kInLoop) return {};
   return {{"front_lag_s", std::max(s.dt_s, thresholds::kFrontLagMinS), thresholds::kFrontLagMaxS,
            true}};
@@ -67,21 +73,34 @@ double in_loop_scale(const Problem& pr, const Eigen::VectorXd& w) {
   return sw > 0.0 ? pr.scales.u_std / sw : 1.0;
 }
 
+PiSignal pi_signal(const Problem& pr, double integral_time_s) {
+  const Eigen::VectorXd e = pr.u - pr.baseline_z / pr.scales.dc_gain;
+  PiSignal out{Eigen::VectorXd(e.size()), 1.0};
+  const double r = pr.dt_s / integral_time_s;
+  double sum = 0.0;
+  for (Eigen::Index i = 0; i < e.size(); ++i) out.a(i) = e(i) + r * (sum += e(i));
+  out.k = in_loop_scale(pr, out.a);
+  out.a *= out.k;
+  return out;
+}
+
 model::TransferFunction rest_after_front(const model::TransferFunction& tf, double front_lag_s) {
   model::TransferFunction out = tf;
   out.num = poly_multiply(tf.num, Eigen::Vector2d(front_lag_s, 1.0));
   return out;
 }
 
-Problem problem_at(const Problem& pr, Place place, double front_lag_s) {
+Problem problem_at(const Problem& pr, Place place, double place_param) {
   Problem at = pr;
   if (place == Place::kInLoop) {
-    const Eigen::VectorXd w = front_signal(pr.u, front_lag_s, pr.dt_s);
+    const Eigen::VectorXd w = front_signal(pr.u, place_param, pr.dt_s);
     at.u = in_loop_scale(pr, w) * w;
   } else if (place == Place::kOutput || place == Place::kFeedback) {
     at.u = pr.baseline_z / pr.scales.dc_gain;
   } else if (place == Place::kError) {
     at.u = pr.u - pr.baseline_z / pr.scales.dc_gain;
+  } else if (place == Place::kPiLoop) {
+    at.u = pi_signal(pr, place_param).a;
   } else {
     return at;
   }
@@ -99,6 +118,14 @@ std::vector<std::vector<AppliedEffect>> placed_starts(Effect effect, Place place
         out.push_back({AppliedEffect{effect, p, place, {c}}});
     return out;
   }
+  if (place == Place::kPiLoop) {
+    for (const double ti_s : thresholds::kPiIntegralSeedsS) {
+      const Problem at = problem_at(pr, place, ti_s);
+      for (auto& p : seeds_for(effect, at, loc))
+        out.push_back({AppliedEffect{effect, p, place, {ti_s}}});
+    }
+    return out;
+  }
   if (place != Place::kInLoop) {
     const Problem at = problem_at(pr, place, 0.0);
     for (auto& p : seeds_for(effect, at, loc)) out.push_back({AppliedEffect{effect, p, place, {}}});
@@ -113,8 +140,13 @@ std::vector<std::vector<AppliedEffect>> placed_starts(Effect effect, Place place
 }
 
 bool place_credible(const AppliedEffect& e) {
-  return e.place != Place::kInLoop || e.place_params.empty() ||
-         e.place_params[0] < thresholds::kFrontLagAtBound * thresholds::kFrontLagMaxS;
+  if (e.place_params.empty()) return true;
+  if (e.place == Place::kInLoop)
+    return e.place_params[0] < thresholds::kFrontLagAtBound * thresholds::kFrontLagMaxS;
+  if (e.place == Place::kPiLoop)
+    return e.place_params[0] < thresholds::kFrontLagAtBound * thresholds::kPiIntegralMaxS &&
+           e.place_params[0] * thresholds::kFrontLagAtBound > thresholds::kPiIntegralMinS;
+  return true;
 }
 
 }  // namespace rig::diagnose

@@ -15,6 +15,10 @@
 //            the same as this form, which needs no L; for effects with a form there,
 //            EffectModel::apply_on_error: the memoryless nonlinearities, and a dead time
 //            (N a delay: a transport delay inside the loop); rig/diagnose/error_loop.hpp)
+//   pi_loop  the same loop with N after the governor's PI: a = k C e, C = 1 + 1/(s T_i),
+//            y = G (u - C^-1 (a - N(a)) / k): a limit, a play or a hysteresis of the
+//            actuator that the loop around it works against (T_i, integral_time_s, fitted;
+//            for effects stepped one sample at a time, EffectModel::step)
 // At each place the nonlinearity acts on a signal on the bias's scale: in the loop F u times
 // k = std(u) / std(F u) (the signal there, as many bias-% as it has the bias's rms: how a
 // rack's travel per % of bias is measured), at the output the output over the static gain
@@ -33,8 +37,8 @@ namespace rig::diagnose {
 struct Problem;
 struct Location;
 
-inline constexpr std::array<Place, 5> kAllPlaces = {Place::kInput, Place::kInLoop, Place::kOutput,
-                                                    Place::kFeedback, Place::kError};
+inline constexpr std::array<Place, 6> kAllPlaces = {
+    Place::kInput, Place::kInLoop, Place::kOutput, Place::kFeedback, Place::kError, Place::kPiLoop};
 
 // Whether the baseline allows the in-loop place (G / F proper: G strictly proper).
 bool in_loop_possible(const model::TransferFunction& tf);
@@ -43,16 +47,27 @@ bool in_loop_possible(const model::TransferFunction& tf);
 Eigen::VectorXd front_signal(const Eigen::VectorXd& v, double front_lag_s, double dt_s);
 // k: the in-loop signal w = F u in the bias's rms.
 double in_loop_scale(const Problem& problem, const Eigen::VectorXd& w);
+// The PI-loop place's signal a = k C e0 on the linear loop's error e0 = u - z0 / G0 (k: in
+// the bias's rms) and k.
+struct PiSignal {
+  Eigen::VectorXd a;
+  double k = 1.0;
+};
+PiSignal pi_signal(const Problem& problem, double integral_time_s);
 // G / F: the baseline's linear part after the nonlinearity.
 model::TransferFunction rest_after_front(const model::TransferFunction& tf, double front_lag_s);
 
 // The problem as seen at a place: u replaced by the linear signal there (for an effect's
-// seeds, which come from the input's scales).
-Problem problem_at(const Problem& problem, Place place, double front_lag_s);
+// seeds, which come from the input's scales). place_param: the front lag in the loop, the
+// integral time after the PI.
+Problem problem_at(const Problem& problem, Place place, double place_param);
 
 // Whether a fitted place can be part of a verdict: a front lag stopped at its upper bound
 // (thresholds.hpp kFrontLagMaxS) is the search reaching for a signal the excitation hardly
-// moves, a stand-in for some other shape, not a place in the loop.
+// moves, a stand-in for some other shape, not a place in the loop; an integral time at its
+// upper bound (kPiIntegralMaxS) is a loop whose integrator takes no part, the stand-in of a
+// form on the error itself, and one at its lower bound reaches for a pure integral of the
+// error, past any governor's.
 bool place_credible(const AppliedEffect& effect);
 
 // Starting points of one effect at one place (the effect's seeds at that place's scales,

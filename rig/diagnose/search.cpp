@@ -31,7 +31,7 @@ using Candidate = std::vector<std::vector<AppliedEffect>>;  // starting points o
 
 // Places that hold one effect only (one front lag, one feedback path, one error loop).
 bool one_per_record(Place p) {
-  return p == Place::kInLoop || p == Place::kFeedback || p == Place::kError;
+  return p == Place::kInLoop || p == Place::kFeedback || p == Place::kError || p == Place::kPiLoop;
 }
 
 // Whether a and b can share a model: one effect per loop place, and the error loop (whose
@@ -42,7 +42,11 @@ bool pairable(const AppliedEffect& a, const AppliedEffect& b) {
     return e.place == Place::kInLoop || e.place == Place::kFeedback ||
            kind_of(e.effect) == EffectKind::kFeedback;
   };
-  return !((a.place == Place::kError && loop(b)) || (b.place == Place::kError && loop(a)));
+  const auto error_loop = [](const AppliedEffect& e) {
+    return e.place == Place::kError || e.place == Place::kPiLoop;
+  };
+  if (error_loop(a) && error_loop(b)) return false;
+  return !((error_loop(a) && loop(b)) || (error_loop(b) && loop(a)));
 }
 
 void rank(std::vector<HypothesisFit>& hs) {
@@ -70,6 +74,7 @@ std::vector<Candidate> singles(Effect e, const Problem& pr, const Location& loc)
     if (place == Place::kInLoop && !in_loop_possible(pr.tf)) continue;
     if (place == Place::kFeedback && !effect_model(e).in_feedback) continue;
     if (place == Place::kError && !effect_model(e).apply_on_error) continue;
+    if (place == Place::kPiLoop && !effect_model(e).step) continue;
     // On a two-level input any map of the bias itself acts as a linear one: a static map
     // as a gain and an offset, a play or a slew limit the same on every (equal) step.
     if (place == Place::kInput && loc.amp.two_level_input) continue;

@@ -151,8 +151,8 @@ inline constexpr double kLevelShiftOfOutputStd = 0.5;
 // a signal the excitation hardly moves.
 inline constexpr double kFrontLagMinS = 0.005;
 inline constexpr double kFrontLagMaxS = 2.0;
-// A fitted front lag at this fraction of kFrontLagMaxS or more stopped at the bound
-// (placement.hpp place_credible).
+// A fitted front lag (or a PI loop's integral time) at this fraction of its upper bound or
+// more stopped at the bound (placement.hpp place_credible).
 inline constexpr double kFrontLagAtBound = 0.98;
 // An in-loop limiter's recovery_s at this fraction of its bound or more stopped there
 // (effects/common.hpp recovery_credible).
@@ -171,5 +171,13 @@ inline constexpr double kFeedbackGainSeeds[] = {0.3, -0.3};
 inline constexpr int kFeedbackPasses = 16;
 inline constexpr double kFeedbackRelaxation = 0.6;
 inline constexpr double kFeedbackTolerance = 1e-4;
+
+// --- After the governor's PI, in its loop (placement.hpp, pi_loop) ---
+// The PI's integral time: from a fast integrating actuator loop (20 ms, two samples) to a
+// slow trim (20 s, a sixth of a short record); a governor's is typically 0.1-2 s.
+inline constexpr double kPiIntegralMinS = 0.02;
+inline constexpr double kPiIntegralMaxS = 20.0;
+// Starting integral times: a fast and a slow governor.
+inline constexpr double kPiIntegralSeedsS[] = {0.25, 1.5};
 
 }  // namespace rig::diagnose::thresholds

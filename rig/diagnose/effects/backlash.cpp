@@ -26,6 +26,12 @@ Eigen::VectorXd apply(const Problem&, const Params& p, Eigen::VectorXd v) {
   return backlash(v, p[0]);
 }
 
+double step(const Params& p, StepState& s, double x, double, double) {
+  s.last_out = s.started ? std::clamp(s.last_out, x - p[0], x + p[0]) : x;
+  s.started = true;
+  return s.last_out;
+}
+
 std::string meaning(const AppliedEffect& e, const HypothesisFit&, const Problem& pr) {
   const auto& p = e.params;
   const double su = pr.scales.u_std;
@@ -53,6 +59,7 @@ const EffectModel kBacklashEffect{
     .parameter_specs = specs,
     .seeds = seeds,
     .apply_input = apply,
+    .step = step,
     .explain = meaning,
     .map_to_plant = to_plant,
     .needs_direction_evidence = true,

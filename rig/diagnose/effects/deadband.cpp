@@ -32,6 +32,10 @@ double apply_on_error(const Params& p, std::span<const double> e, double, double
   return v > p[0] ? v - p[0] : v < -p[0] ? v + p[0] : 0.0;
 }
 
+double step(const Params& p, StepState&, double x, double, double) {
+  return x > p[0] ? x - p[0] : x < -p[0] ? x + p[0] : 0.0;
+}
+
 std::string meaning(const AppliedEffect& e, const HypothesisFit&, const Problem& pr) {
   const auto& p = e.params;
   const double su = pr.scales.u_std;
@@ -65,6 +69,7 @@ const EffectModel kDeadbandEffect{
     .seeds = seeds,
     .apply_input = apply,
     .apply_on_error = apply_on_error,
+    .step = step,
     .explain = meaning,
     .map_to_plant = to_plant,
 };

@@ -46,6 +46,14 @@ Eigen::VectorXd apply(const Problem&, const Params& p, Eigen::VectorXd v) {
   return p[2] * v + p[3] * z;
 }
 
+double step(const Params& p, StepState& s, double x, double, double) {
+  const double du = s.started ? x - s.last_in : 0.0;
+  s.memory = bouc_wen_step(s.memory, du, p[0], p[1]);
+  s.last_in = x;
+  s.started = true;
+  return p[2] * x + p[3] * s.memory;
+}
+
 std::string meaning(const AppliedEffect& e, const HypothesisFit&, const Problem& pr) {
   const auto& p = e.params;
   if (p[3] > 0.0)
@@ -71,6 +79,7 @@ const EffectModel kHysteresisEffect{
     .parameter_specs = specs,
     .seeds = seeds,
     .apply_input = apply,
+    .step = step,
     .explain = meaning,
     .generalises = Effect::kBacklash,  // shape_ratio 1: a play
     .in_feedback = true,               // a hysteretic spring (the Bouc-Wen oscillator)

@@ -28,6 +28,18 @@ Eigen::VectorXd apply(const Problem& pr, const Params& p, Eigen::VectorXd v) {
   return p.size() > 1 ? rate_limit_in_loop(v, p[0], p[1], pr.dt_s) : rate_limit(v, p[0], pr.dt_s);
 }
 
+double step(const Params& p, StepState& s, double x, double, double dt_s) {
+  const double limit = p[0] * dt_s;
+  if (s.started)
+    s.last_out += std::clamp(
+        x - s.last_in + in_loop_recovery(p[1], dt_s) * (s.last_in - s.last_out), -limit, limit);
+  else
+    s.last_out = x;
+  s.last_in = x;
+  s.started = true;
+  return s.last_out;
+}
+
 std::string meaning(const AppliedEffect& e, const HypothesisFit&, const Problem& pr) {
   const auto& p = e.params;
   return fmt::format("the input cannot change faster than {:.3g} per second{}", p[0],
@@ -56,6 +68,7 @@ const EffectModel kRateLimitEffect{
     .parameter_specs = specs,
     .seeds = seeds,
     .apply_input = apply,
+    .step = step,
     .explain = meaning,
     .map_to_plant = to_plant,
     .credible = credible,

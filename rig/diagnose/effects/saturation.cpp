@@ -35,6 +35,15 @@ Eigen::VectorXd apply(const Problem& pr, const Params& p, Eigen::VectorXd v) {
   return p.size() > 2 ? saturate_in_loop(v, -p[1], p[0], p[2], pr.dt_s) : saturate(v, -p[1], p[0]);
 }
 
+double step(const Params& p, StepState& s, double x, double, double dt_s) {
+  const double inc =
+      s.started ? x - s.last_in + in_loop_recovery(p[2], dt_s) * (s.last_in - s.last_out) : x;
+  s.last_out = std::clamp((s.started ? s.last_out : 0.0) + inc, -p[1], std::max(-p[1], p[0]));
+  s.last_in = x;
+  s.started = true;
+  return s.last_out;
+}
+
 std::string meaning(const AppliedEffect& e, const HypothesisFit&, const Problem& pr) {
   const auto& p = e.params;
   const double su = pr.scales.u_std;
@@ -87,6 +96,7 @@ const EffectModel kSaturationEffect{
     .parameter_specs = specs,
     .seeds = seeds,
     .apply_input = apply,
+    .step = step,
     .explain = meaning,
     .map_to_plant = to_plant,
     .credible = credible,

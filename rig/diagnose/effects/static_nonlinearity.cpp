@@ -38,6 +38,10 @@ double apply_on_error(const Params& p, std::span<const double> e, double sigma, 
   return v + p[0] * v * v / s + p[1] * v * v * v / (s * s) + p[2] * std::max(v, 0.0);
 }
 
+double step(const Params& p, StepState&, double x, double sigma, double dt_s) {
+  return apply_on_error(p, std::span<const double>(&x, 1), sigma, dt_s);
+}
+
 std::string meaning(const AppliedEffect& e, const HypothesisFit&, const Problem&) {
   const auto& p = e.params;
   std::string s = fmt::format(
@@ -61,6 +65,7 @@ const EffectModel kStaticNonlinearityEffect{
     .seeds = seeds,
     .apply_input = apply,
     .apply_on_error = apply_on_error,
+    .step = step,
     .explain = meaning,
 };
 
