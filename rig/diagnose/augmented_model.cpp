@@ -197,11 +197,12 @@ std::function<double(std::span<const double>)> error_effect(const Problem& pr,
                                                             const AppliedEffect& err) {
   const EffectModel& m = effect_model(err.effect);
   if (err.place == Place::kPiLoop) {
-    const double ti_s = err.place_params.at(0), sigma = pr.scales.u_std;  // a: the bias's rms
+    const PiGovernor gov = pi_governor(err.place_params);
+    const double sigma = pr.scales.u_std;  // a: the bias's rms
     const auto step = m.step;
     return pi_loop_on_error([step, &p = err.params, sigma, dt_s = pr.dt_s](
                                 StepState& s, double x) { return step(p, s, x, sigma, dt_s); },
-                            pi_signal(pr, ti_s).k, ti_s, pr.dt_s);
+                            pi_signal(pr, gov).k, gov, pr.dt_s);
   }
   const Eigen::VectorXd e0 = pr.u - pr.baseline_z / pr.scales.dc_gain;
   const double sigma = std::sqrt((e0.array() - e0.mean()).square().mean());

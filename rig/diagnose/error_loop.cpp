@@ -1,5 +1,6 @@
 #include "rig/diagnose/error_loop.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <vector>
 
@@ -73,27 +74,36 @@ namespace {
 
 // The PI loop's sums and the nonlinearity's state after one sample.
 struct PiState {
-  double sum_e = 0.0;  // sum of e_j
-  double sum_d = 0.0;  // sum of d_j
+  double sum_e = 0.0;     // sum of e_j
+  double sum_d = 0.0;     // sum of d_j
+  double filtered = 0.0;  // the PI's output through the filter, f_k
+  double lost = 0.0;      // (a_k - N(a_k)) / k
   StepState step;
 };
 
 }  // namespace
 
+double pi_filter_pole(double filter_lag_s, double dt_s) {
+  return std::exp(-dt_s / std::max(filter_lag_s, 1e-300));
+}
+
 std::function<double(std::span<const double>)> pi_loop_on_error(Stepper step, double k,
-                                                                double integral_time_s,
+                                                                const PiGovernor& gov,
                                                                 double dt_s) {
-  const double r = dt_s / integral_time_s;
-  return [step = std::move(step), k, r, done = PiState{}, trial = PiState{},
+  const double r = dt_s / gov.integral_time_s, p = pi_filter_pole(gov.filter_lag_s, dt_s);
+  return [step = std::move(step), k, r, p, done = PiState{}, trial = PiState{},
           at = std::size_t{0}](std::span<const double> e) mutable {
     const std::size_t i = e.size() - 1;
     if (i != at) done = trial, at = i;  // a new sample: the last one's trial stands
     trial = done;
     const double ek = e.back();
     trial.sum_e += ek;
-    const double a = k * (ek + r * trial.sum_e);
-    const double lost = (a - step(trial.step, a)) / k;
-    const double d = (lost - r * done.sum_d) / (1.0 + r);  // d + r (sum_d + d) = lost
+    trial.filtered = p * done.filtered + (1.0 - p) * (ek + r * trial.sum_e);
+    const double a = k * trial.filtered;
+    trial.lost = (a - step(trial.step, a)) / k;
+    // The filter's input that gives `lost` at its output, then the PI's: d + r (sum_d + d).
+    const double s = (trial.lost - p * done.lost) / (1.0 - p);
+    const double d = (s - r * done.sum_d) / (1.0 + r);
     trial.sum_d += d;
     return ek - d;
   };

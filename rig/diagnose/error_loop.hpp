@@ -27,15 +27,24 @@ Eigen::VectorXd close_error_loop(const model::TransferFunction& tf, const Eigen:
                                  const Eigen::VectorXd& z0, double g0, double dt_s,
                                  const std::function<double(std::span<const double>)>& on_error);
 
-// N for close_error_loop when the nonlinearity sits after the governor's PI (placement.hpp,
-// pi_loop): a_k = k (e_k + (dt/T_i) sum_{j<=k} e_j), its output through `step` (the effect's
-// stepped form, state kept between samples), and the error that would have moved the PI's
-// output as N did, e_k - d_k with C d = (a - N(a)) / k solved sample by sample. A call for
-// the sample already being solved (close_error_loop's passes) starts again from the state
-// the previous sample left.
+// The governor before a nonlinearity in its loop: a PI and its output filter,
+// C = (1 + 1/(s T_i)) / (1 + s T_f), stepped as x_k = e_k + (dt/T_i) sum_{j<=k} e_j,
+// f_k = p f_{k-1} + (1 - p) x_k, p = exp(-dt/T_f) (pi_filter_pole).
+struct PiGovernor {
+  double integral_time_s = 1.0;
+  double filter_lag_s = 0.0;
+};
+double pi_filter_pole(double filter_lag_s, double dt_s);
+
+// N for close_error_loop when the nonlinearity sits after the governor (placement.hpp,
+// pi_loop): a_k = k f_k, its output through `step` (the effect's stepped form, state kept
+// between samples), and the error that would have moved the governor's output as N did,
+// e_k - d_k with C d = (a - N(a)) / k solved sample by sample (the filter and the PI
+// inverted exactly in discrete time). A call for the sample already being solved
+// (close_error_loop's passes) starts again from the state the previous sample left.
 using Stepper = std::function<double(StepState& state, double x)>;
 std::function<double(std::span<const double>)> pi_loop_on_error(Stepper step, double k,
-                                                                double integral_time_s,
+                                                                const PiGovernor& governor,
                                                                 double dt_s);
 
 }  // namespace rig::diagnose

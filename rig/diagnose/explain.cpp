@@ -87,10 +87,10 @@ std::string what_effect_means(const AppliedEffect& e, const HypothesisFit& h, co
          "output over the static gain, in bias-%: a governor's power error)";
   if (e.place == Place::kPiLoop)
     s += fmt::format(
-        ", not on the bias but after the governor's PI (integral time {:.2g} s), inside the "
-        "loop that works against it (the actuator or the rack; the values are the bias-% "
-        "equivalents there)",
-        e.place_params.at(0));
+        ", not on the bias but after the governor's PI (integral time {:.2g} s, output lag "
+        "{:.0f} ms), inside the loop that works against it (the actuator or the rack; the "
+        "values are the bias-% equivalents there)",
+        e.place_params.at(0), 1e3 * e.place_params.at(1));
   if (e.place == Place::kOutput)
     s += fmt::format(
         ", not on the bias but on the measured output (the values are bias-% equivalents; "

@@ -30,9 +30,9 @@ constexpr PlaceWords kPlaceWords[] = {
      "error: on e = u - y / G0 of a unity-feedback loop whose closed loop is the tf: "
      "y = tf (u - (e - N(e)))"},
     {Place::kPiLoop, "pi_loop", " (after the governor's PI, in its loop)",
-     "after the PI of a unity-feedback loop whose closed loop is the tf: e = u - y / G0, "
-     "a = k (e + integral(e) / integral_time_s), y = tf (u - C^-1 (a - N(a)) / k), k from the "
-     "linear loop's a in the bias's rms"},
+     "after the PI and output filter of a unity-feedback loop whose closed loop is the tf: "
+     "e = u - y / G0, a = k C e, C = (1 + 1 / (s integral_time_s)) / (1 + s filter_lag_s), "
+     "y = tf (u - C^-1 (a - N(a)) / k), k from the linear loop's a in the bias's rms"},
 };
 
 const PlaceWords& words(Place place) {
@@ -51,7 +51,8 @@ std::vector<ParamSpec> place_specs(Place place, const DataScales& s) {
   if (place == Place::kFeedback)
     return {{"feedback_gain", -thresholds::kFeedbackGainMax, thresholds::kFeedbackGainMax, false}};
   if (place == Place::kPiLoop)
-    return {{"integral_time_s", thresholds::kPiIntegralMinS, thresholds::kPiIntegralMaxS, true}};
+    return {{"integral_time_s", thresholds::kPiIntegralMinS, thresholds::kPiIntegralMaxS, true},
+            {"filter_lag_s", thresholds::kPiFilterMinS, thresholds::kPiFilterMaxS, true}};
   if (place != Place::kInLoop) return {};
   return {{"front_lag_s", std::max(s.dt_s, thresholds::kFrontLagMinS), thresholds::kFrontLagMaxS,
            true}};
@@ -73,15 +74,20 @@ double in_loop_scale(const Problem& pr, const Eigen::VectorXd& w) {
   return sw > 0.0 ? pr.scales.u_std / sw : 1.0;
 }
 
-PiSignal pi_signal(const Problem& pr, double integral_time_s) {
+PiSignal pi_signal(const Problem& pr, const PiGovernor& gov) {
   const Eigen::VectorXd e = pr.u - pr.baseline_z / pr.scales.dc_gain;
   PiSignal out{Eigen::VectorXd(e.size()), 1.0};
-  const double r = pr.dt_s / integral_time_s;
-  double sum = 0.0;
-  for (Eigen::Index i = 0; i < e.size(); ++i) out.a(i) = e(i) + r * (sum += e(i));
+  const double r = pr.dt_s / gov.integral_time_s, p = pi_filter_pole(gov.filter_lag_s, pr.dt_s);
+  double sum = 0.0, f = 0.0;
+  for (Eigen::Index i = 0; i < e.size(); ++i)
+    out.a(i) = f = p * f + (1.0 - p) * (e(i) + r * (sum += e(i)));
   out.k = in_loop_scale(pr, out.a);
   out.a *= out.k;
   return out;
+}
+
+PiGovernor pi_governor(std::span<const double> place_params) {
+  return {place_params[0], place_params.size() > 1 ? place_params[1] : 0.0};
 }
 
 model::TransferFunction rest_after_front(const model::TransferFunction& tf, double front_lag_s) {
@@ -90,7 +96,8 @@ model::TransferFunction rest_after_front(const model::TransferFunction& tf, doub
   return out;
 }
 
-Problem problem_at(const Problem& pr, Place place, double place_param) {
+Problem problem_at(const Problem& pr, Place place, std::span<const double> place_params) {
+  const double place_param = place_params.empty() ? 0.0 : place_params[0];
   Problem at = pr;
   if (place == Place::kInLoop) {
     const Eigen::VectorXd w = front_signal(pr.u, place_param, pr.dt_s);
@@ -100,7 +107,7 @@ Problem problem_at(const Problem& pr, Place place, double place_param) {
   } else if (place == Place::kError) {
     at.u = pr.u - pr.baseline_z / pr.scales.dc_gain;
   } else if (place == Place::kPiLoop) {
-    at.u = pi_signal(pr, place_param).a;
+    at.u = pi_signal(pr, pi_governor(place_params)).a;
   } else {
     return at;
   }
@@ -112,7 +119,7 @@ std::vector<std::vector<AppliedEffect>> placed_starts(Effect effect, Place place
                                                       const Location& loc) {
   std::vector<std::vector<AppliedEffect>> out;
   if (place == Place::kFeedback) {
-    const Problem at = problem_at(pr, place, 0.0);
+    const Problem at = problem_at(pr, place, {});
     for (auto& p : seeds_for(effect, at, loc))
       for (const double c : thresholds::kFeedbackGainSeeds)
         out.push_back({AppliedEffect{effect, p, place, {c}}});
@@ -120,19 +127,20 @@ std::vector<std::vector<AppliedEffect>> placed_starts(Effect effect, Place place
   }
   if (place == Place::kPiLoop) {
     for (const double ti_s : thresholds::kPiIntegralSeedsS) {
-      const Problem at = problem_at(pr, place, ti_s);
+      const std::vector<double> gov{ti_s, thresholds::kPiFilterSeedS};
+      const Problem at = problem_at(pr, place, gov);
       for (auto& p : seeds_for(effect, at, loc))
-        out.push_back({AppliedEffect{effect, p, place, {ti_s}}});
+        out.push_back({AppliedEffect{effect, p, place, gov}});
     }
     return out;
   }
   if (place != Place::kInLoop) {
-    const Problem at = problem_at(pr, place, 0.0);
+    const Problem at = problem_at(pr, place, {});
     for (auto& p : seeds_for(effect, at, loc)) out.push_back({AppliedEffect{effect, p, place, {}}});
     return out;
   }
   for (const double lag_s : thresholds::kFrontLagSeedsS) {
-    const Problem at = problem_at(pr, place, lag_s);
+    const Problem at = problem_at(pr, place, std::vector<double>{lag_s});
     for (auto& p : seeds_for(effect, at, loc))
       out.push_back({AppliedEffect{effect, p, place, {lag_s}}});
   }
@@ -145,7 +153,8 @@ bool place_credible(const AppliedEffect& e) {
     return e.place_params[0] < thresholds::kFrontLagAtBound * thresholds::kFrontLagMaxS;
   if (e.place == Place::kPiLoop)
     return e.place_params[0] < thresholds::kFrontLagAtBound * thresholds::kPiIntegralMaxS &&
-           e.place_params[0] * thresholds::kFrontLagAtBound > thresholds::kPiIntegralMinS;
+           e.place_params[0] * thresholds::kFrontLagAtBound > thresholds::kPiIntegralMinS &&
+           e.place_params.at(1) < thresholds::kFrontLagAtBound * thresholds::kPiFilterMaxS;
   return true;
 }
 

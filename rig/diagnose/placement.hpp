@@ -30,6 +30,7 @@
 #include <vector>
 
 #include "rig/diagnose/effects.hpp"
+#include "rig/diagnose/error_loop.hpp"
 #include "rig/model/transfer_function.hpp"
 
 namespace rig::diagnose {
@@ -53,14 +54,15 @@ struct PiSignal {
   Eigen::VectorXd a;
   double k = 1.0;
 };
-PiSignal pi_signal(const Problem& problem, double integral_time_s);
+PiSignal pi_signal(const Problem& problem, const PiGovernor& governor);
+// The governor of a pi_loop effect's place parameters (integral_time_s, filter_lag_s).
+PiGovernor pi_governor(std::span<const double> place_params);
 // G / F: the baseline's linear part after the nonlinearity.
 model::TransferFunction rest_after_front(const model::TransferFunction& tf, double front_lag_s);
 
 // The problem as seen at a place: u replaced by the linear signal there (for an effect's
-// seeds, which come from the input's scales). place_param: the front lag in the loop, the
-// integral time after the PI.
-Problem problem_at(const Problem& problem, Place place, double place_param);
+// seeds, which come from the input's scales), for the place's parameters (place_specs).
+Problem problem_at(const Problem& problem, Place place, std::span<const double> place_params);
 
 // Whether a fitted place can be part of a verdict: a front lag stopped at its upper bound
 // (thresholds.hpp kFrontLagMaxS) is the search reaching for a signal the excitation hardly

@@ -179,5 +179,10 @@ inline constexpr double kPiIntegralMinS = 0.02;
 inline constexpr double kPiIntegralMaxS = 20.0;
 // Starting integral times: a fast and a slow governor.
 inline constexpr double kPiIntegralSeedsS[] = {0.25, 1.5};
+// The governor's output filter (with the actuator's own lag): from none (5 ms, half a
+// sample) to 0.5 s (slower than any governor's output stage), started at 50 ms.
+inline constexpr double kPiFilterMinS = 0.005;
+inline constexpr double kPiFilterMaxS = 0.5;
+inline constexpr double kPiFilterSeedS = 0.05;
 
 }  // namespace rig::diagnose::thresholds

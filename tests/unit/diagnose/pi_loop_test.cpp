@@ -73,7 +73,7 @@ TEST(PiLoop, TheIdentityLeavesTheBaseline) {
   const Eigen::VectorXd z0 = model::simulate(closed_loop(), u, in.dt_s);
   const auto identity = [](StepState&, double x) { return x; };
   const Eigen::VectorXd y = close_error_loop(closed_loop(), u, z0, 1.0, in.dt_s,
-                                             pi_loop_on_error(identity, kKp, kTiS, in.dt_s));
+                                             pi_loop_on_error(identity, kKp, {kTiS, 0.0}, in.dt_s));
   EXPECT_LT((y - z0).cwiseAbs().maxCoeff(), 1e-12 * rms(z0));
 }
 
@@ -88,8 +88,8 @@ TEST(PiLoop, ALimitAfterThePiMatchesTheIntegratedLoop) {
   const Eigen::VectorXd reference = integrated_loop(u, dt_s, clamp);
   const Eigen::VectorXd z0 = model::simulate(closed_loop(), u, dt_s);
   const auto step = [&](StepState&, double a) { return clamp(a); };
-  const Eigen::VectorXd y =
-      close_error_loop(closed_loop(), u, z0, 1.0, dt_s, pi_loop_on_error(step, kKp, kTiS, dt_s));
+  const Eigen::VectorXd y = close_error_loop(closed_loop(), u, z0, 1.0, dt_s,
+                                             pi_loop_on_error(step, kKp, {kTiS, 0.0}, dt_s));
   // The same limit on the bias itself: another shape.
   const Eigen::VectorXd on_bias = model::simulate(closed_loop(), u.cwiseMax(-w).cwiseMin(w), dt_s);
   ASSERT_GT(rms(reference - z0), 0.05 * rms(reference));
