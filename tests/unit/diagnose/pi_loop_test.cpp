@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 #include <functional>
 #include <span>
 
@@ -27,22 +28,30 @@ constexpr double kKp = 1.5;
 constexpr double kTiS = 0.4;
 constexpr double kTpS = 0.3;
 
-// The closed loop G = kp (Ti s + 1) / (Ti Tp s^2 + Ti (1 + kp) s + kp), static gain 1.
-model::TransferFunction closed_loop() {
+// The closed loop G = kp (Ti s + 1) / (Ti Tp s^2 + Ti (1 + kp) s + kp), static gain 1; with
+// an output filter 1 / (1 + s Tf) after the PI,
+// G = kp (Ti s + 1) / (Ti Tf Tp s^3 + Ti (Tf + Tp) s^2 + Ti (1 + kp) s + kp).
+model::TransferFunction closed_loop(double filter_s = 0.0) {
   model::TransferFunction g;
   g.num = Eigen::Vector2d(kKp * kTiS, kKp);
-  g.den = Eigen::Vector3d(kTiS * kTpS, kTiS * (1.0 + kKp), kKp);
+  if (filter_s > 0.0)
+    g.den =
+        Eigen::Vector4d(kTiS * filter_s * kTpS, kTiS * (filter_s + kTpS), kTiS * (1.0 + kKp), kKp);
+  else
+    g.den = Eigen::Vector3d(kTiS * kTpS, kTiS * (1.0 + kKp), kKp);
   return g;
 }
 
-// The actuator stepped on every sub-step (its state kept), the plant integrated exactly over
-// each sub-step for the actuator's output held, 100 sub-steps per sample, the input linear
-// between samples.
+// The actuator stepped on every sub-step (its state kept), the output filter and the plant
+// integrated exactly over each sub-step for their inputs held, 100 sub-steps per sample, the
+// input linear between samples.
 Eigen::VectorXd integrated_loop(const Eigen::VectorXd& u, double dt_s,
-                                const std::function<double(double)>& actuator) {
+                                const std::function<double(double)>& actuator,
+                                double filter_s = 0.0) {
   constexpr int kSub = 100;
   const double h = dt_s / kSub, decay = std::exp(-h / kTpS);
-  double y = 0.0, xi = 0.0;
+  const double filter_decay = filter_s > 0.0 ? std::exp(-h / filter_s) : 0.0;
+  double y = 0.0, xi = 0.0, f = 0.0;
   Eigen::VectorXd out(u.size());
   for (Eigen::Index k = 0; k < u.size(); ++k) {
     out(k) = y;
@@ -51,7 +60,8 @@ Eigen::VectorXd integrated_loop(const Eigen::VectorXd& u, double dt_s,
       const double uk = k + 1 < u.size() ? u(k) + t * (u(k + 1) - u(k)) : u(k);
       const double e = uk - y;
       xi += e * h;
-      const double rack = actuator(kKp * (e + xi / kTiS));
+      f = kKp * (e + xi / kTiS) + (f - kKp * (e + xi / kTiS)) * filter_decay;
+      const double rack = actuator(f);
       y = rack + (y - rack) * decay;
     }
   }
@@ -92,8 +102,35 @@ TEST(PiLoop, ALimitAfterThePiMatchesTheIntegratedLoop) {
                                              pi_loop_on_error(step, kKp, {kTiS, 0.0}, dt_s));
   // The same limit on the bias itself: another shape.
   const Eigen::VectorXd on_bias = model::simulate(closed_loop(), u.cwiseMax(-w).cwiseMin(w), dt_s);
+  std::printf("limit after the PI: stepped %.4f, on the bias %.3f of its effect\n",
+              rms(y - reference) / rms(reference - z0),
+              rms(on_bias - reference) / rms(reference - z0));
   ASSERT_GT(rms(reference - z0), 0.05 * rms(reference));
   EXPECT_GT(rms(on_bias - reference), 0.3 * rms(reference - z0));
+  EXPECT_LT(rms(y - reference), 0.05 * rms(reference - z0));
+}
+
+// The same with the governor's output filter between the PI and the limit: the stepped loop
+// inverts the filter exactly in discrete time.
+TEST(PiLoop, ALimitAfterAFilteredPiMatchesTheIntegratedLoop) {
+  const DiagnoseInput in = null_record(74);
+  const double dt_s = in.dt_s, filter_s = 0.08;
+  const Eigen::VectorXd u = in.u.array() - in.u.mean();
+  const double w = 1.2 * rms(linear_pi_output(u, dt_s));
+  const auto clamp = [w](double a) { return std::clamp(a, -w, w); };
+  const Eigen::VectorXd reference = integrated_loop(u, dt_s, clamp, filter_s);
+  const Eigen::VectorXd z0 = model::simulate(closed_loop(filter_s), u, dt_s);
+  const auto step = [&](StepState&, double a) { return clamp(a); };
+  const Eigen::VectorXd y = close_error_loop(closed_loop(filter_s), u, z0, 1.0, dt_s,
+                                             pi_loop_on_error(step, kKp, {kTiS, filter_s}, dt_s));
+  // Without the filter in the place: another shape.
+  const Eigen::VectorXd unfiltered = close_error_loop(
+      closed_loop(filter_s), u, z0, 1.0, dt_s, pi_loop_on_error(step, kKp, {kTiS, 0.0}, dt_s));
+  std::printf("limit after the filtered PI: stepped %.4f, without the filter %.3f of its effect\n",
+              rms(y - reference) / rms(reference - z0),
+              rms(unfiltered - reference) / rms(reference - z0));
+  ASSERT_GT(rms(reference - z0), 0.05 * rms(reference));
+  EXPECT_GT(rms(unfiltered - reference), 0.2 * rms(reference - z0));
   EXPECT_LT(rms(y - reference), 0.05 * rms(reference - z0));
 }
 
