@@ -14,6 +14,7 @@
 #include "rig/diagnose/diagnose.hpp"
 #include "rig/diagnose/effect_registry.hpp"
 #include "rig/diagnose/locate.hpp"
+#include "rig/diagnose/thresholds.hpp"
 
 namespace rig::diagnose {
 namespace {
@@ -46,7 +47,7 @@ TEST(Placement, ADeadbandOnTheBiasIsAtTheInputAndTriedAtEachPlace) {
   const DiagnoseResult r = diagnose(in);
   ASSERT_EQ(r.verdict, "deadband") << r.explanation;
   EXPECT_EQ(r.chosen()->effects.front().place, Place::kInput) << r.explanation;
-  int places[5] = {0, 0, 0, 0, 0};
+  int places[kAllPlaces.size()] = {};
   for (const auto& h : r.hypotheses)
     if (h.effects.size() == 1 && h.effects[0].effect == Effect::kDeadband)
       ++places[static_cast<int>(h.effects[0].place)];
@@ -55,6 +56,21 @@ TEST(Placement, ADeadbandOnTheBiasIsAtTheInputAndTriedAtEachPlace) {
   EXPECT_EQ(places[static_cast<int>(Place::kOutput)], 1);
   EXPECT_EQ(places[static_cast<int>(Place::kFeedback)], 0);  // not tried in the feedback
   EXPECT_EQ(places[static_cast<int>(Place::kError)], 1);     // memoryless: on the error
+  EXPECT_EQ(places[static_cast<int>(Place::kPiLoop)], 1);    // stepped: after the PI
+}
+
+// A place parameter stopped at its bound is the search's stand-in for another shape: an
+// integral time at 20 s (no integrator: the error's form) or 20 ms (a pure integral), an
+// output lag at 0.5 s; inside them the place can be a verdict's.
+TEST(Placement, APiLoopAtItsBoundsIsNoPlaceForAVerdict) {
+  const auto at = [](double ti_s, double tf_s) {
+    return AppliedEffect{Effect::kBacklash, {0.1}, Place::kPiLoop, {ti_s, tf_s}};
+  };
+  EXPECT_TRUE(place_credible(at(0.25, 0.05)));
+  EXPECT_TRUE(place_credible(at(0.25, thresholds::kPiFilterMinS)));  // no filter is a place
+  EXPECT_FALSE(place_credible(at(thresholds::kPiIntegralMaxS, 0.05)));
+  EXPECT_FALSE(place_credible(at(thresholds::kPiIntegralMinS, 0.05)));
+  EXPECT_FALSE(place_credible(at(0.25, thresholds::kPiFilterMaxS)));
 }
 
 TEST(Placement, OnATwoLevelInputNothingIsFittedOnTheBiasItself) {
