@@ -4,6 +4,7 @@
 #include <cmath>
 #include <stdexcept>
 #include <unsupported/Eigen/MatrixFunctions>
+#include <vector>
 
 namespace rig::diagnose {
 
@@ -152,15 +153,31 @@ Eigen::VectorXd simulate_with_feedback(const model::TransferFunction& tf_in,
   const Eigen::VectorXd gamma = e.topRightCorner(n, 1);
   const double d0 = b(0);
   const Eigen::RowVectorXd c = b.tail(n).transpose() - d0 * tf.den.tail(n).transpose();
-  Eigen::VectorXd x = Eigen::VectorXd::Zero(n);
+  // Plain arrays (row-major phi): a general matrix-vector product per sample costs more than
+  // the arithmetic of a small state.
+  const auto nn = static_cast<std::size_t>(n);
+  std::vector<double> p(nn * nn), g(nn), cr(nn), x(nn, 0.0), next(nn);
+  for (std::size_t i = 0; i < nn; ++i) {
+    const auto ii = static_cast<Eigen::Index>(i);
+    for (std::size_t j = 0; j < nn; ++j) p[i * nn + j] = phi(ii, static_cast<Eigen::Index>(j));
+    g[i] = gamma(ii);
+    cr[i] = c(ii);
+  }
   double z_prev = 0.0;
   for (Eigen::Index k = 0; k < N; ++k) {
-    const double z = c.dot(x);
+    double z = 0.0;
+    for (std::size_t i = 0; i < nn; ++i) z += cr[i] * x[i];
     const double fb = feedback(z, (z - z_prev) / dt_s);
     z_prev = z;
     const double u_next = k + 1 < N ? ud(k + 1) : ud(k);
     out(k) = z + d0 * (ud(k) - fb);
-    x = phi * x + gamma * (0.5 * (ud(k) + u_next) - fb);
+    const double drive = 0.5 * (ud(k) + u_next) - fb;
+    for (std::size_t i = 0; i < nn; ++i) {
+      double s = g[i] * drive;
+      for (std::size_t j = 0; j < nn; ++j) s += p[i * nn + j] * x[j];
+      next[i] = s;
+    }
+    x.swap(next);
   }
   return out;
 }

@@ -33,6 +33,19 @@ Eigen::VectorXd close_error_loop(const model::TransferFunction& tf_in, const Eig
   Eigen::VectorXd bin = Eigen::VectorXd::Zero(n);
   if (n > 0) bin(0) = 1.0;
   const model::FohStep hold = n > 0 ? model::foh_step(a, bin, dt_s) : model::FohStep{};
+  // The step as plain arrays (row-major phi): the state is small, and a general
+  // matrix-vector product per sample costs more than the arithmetic.
+  const auto nn = static_cast<std::size_t>(n);
+  std::vector<double> phi(nn * nn), ga(nn), gb(nn), top_row(nn), out_row(nn);
+  for (std::size_t i = 0; i < nn; ++i) {
+    const auto ii = static_cast<Eigen::Index>(i);
+    for (std::size_t j = 0; j < nn; ++j)
+      phi[i * nn + j] = hold.phi(ii, static_cast<Eigen::Index>(j));
+    ga[i] = hold.ga(ii);
+    gb[i] = hold.gb(ii);
+    top_row[i] = a(0, ii);
+    out_row[i] = b(ii + 1);
+  }
   std::vector<double> d(static_cast<std::size_t>(samples), 0.0), es(d.size(), 0.0);
   auto d_at = [&](Eigen::Index j) { return j >= 0 ? d[static_cast<std::size_t>(j)] : 0.0; };
   // The delayed d (0 before it starts, as model::filtered_derivatives has it).
@@ -40,7 +53,8 @@ Eigen::VectorXd close_error_loop(const model::TransferFunction& tf_in, const Eig
     if (k - whole < 0 || (frac > 0.0 && k - whole - 1 < 0)) return 0.0;
     return (1.0 - frac) * d_at(k - whole) + frac * d_at(k - whole - 1);
   };
-  Eigen::VectorXd x = Eigen::VectorXd::Zero(n), x_prev = x, y(samples);
+  std::vector<double> x(nn, 0.0), x_prev(nn, 0.0);
+  Eigen::VectorXd y(samples);
   double ud_prev = 0.0;
   for (Eigen::Index k = 0; k < samples; ++k) {
     // The state at k and the correction G d there, for the d_k guessed so far.
@@ -48,10 +62,18 @@ Eigen::VectorXd close_error_loop(const model::TransferFunction& tf_in, const Eig
       const double v = ud(k);
       // With a whole-sample dead time the delayed d jumps at it: the step into it holds 0.
       const double v_end = (frac == 0.0 && k - whole <= 0) ? 0.0 : v;
-      if (k > 0 && n > 0)
-        x = hold.phi * x_prev + hold.ga * ud_prev + hold.gb * ((v_end - ud_prev) / dt_s);
-      const double top = v + (n > 0 ? a.row(0).dot(x) : 0.0);
-      return b(0) * top + (n > 0 ? b.tail(n).dot(x) : 0.0);
+      if (k > 0) {
+        const double slope = (v_end - ud_prev) / dt_s;
+        for (std::size_t i = 0; i < nn; ++i) {
+          double s = ga[i] * ud_prev + gb[i] * slope;
+          const double* row = &phi[i * nn];
+          for (std::size_t j = 0; j < nn; ++j) s += row[j] * x_prev[j];
+          x[i] = s;
+        }
+      }
+      double top = v, out = 0.0;
+      for (std::size_t i = 0; i < nn; ++i) top += top_row[i] * x[i], out += out_row[i] * x[i];
+      return b(0) * top + out;
     };
     const int passes = whole == 0 ? kSameSamplePasses : 1;
     double c = 0.0;

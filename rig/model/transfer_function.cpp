@@ -133,8 +133,9 @@ void run_steps(const StepMap& m, const Eigen::VectorXd& a0_in, Eigen::Index samp
   }
 }
 
-// The orders diagnose and identify meet run at a fixed size; larger ones at dynamic size.
-inline constexpr int kMaxFixedOrder = 10;
+// The orders diagnose and identify meet run at a fixed size (a tenth-order model with the
+// effects of a pair added); larger ones at dynamic size.
+inline constexpr int kMaxFixedOrder = 14;
 
 template <int N, class Input, class Sink>
 void run_sized(Eigen::Index n, const StepMap& m, const Eigen::VectorXd& a0, Eigen::Index samples,
