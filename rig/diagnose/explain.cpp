@@ -9,6 +9,8 @@
 #include "rig/diagnose/diagnose.hpp"
 #include "rig/diagnose/effect_registry.hpp"
 #include "rig/diagnose/effects/common.hpp"
+#include "rig/diagnose/thresholds.hpp"
+#include "rig/diagnose/verdict.hpp"
 
 namespace rig::diagnose {
 namespace {
@@ -213,6 +215,13 @@ std::string explain(const DiagnoseResult& r) {
       s += " was not found.";
     return s;
   }
+  if (!r.location.input_mismatch && r.location.clip.side == 0 && has_input_side(*h))
+    s += fmt::format(
+        "The input tests found no mismatch beside the disturbance (its wander widens their "
+        "bounds), but fitted with it the effect diagnosed below adds {:.1f} points of validation "
+        "score, "
+        "more than the {:.1f} asked of an effect found this way. ",
+        h->score - disturbance_part_score(r.hypotheses, *h), thresholds::kUnseenInputGainPct);
   std::string what;
   for (const auto& e : h->effects) {
     if (!what.empty()) what += "; together with that, ";

@@ -19,6 +19,7 @@ namespace {
 using thresholds::kDominantDisturbanceGainPct;
 using thresholds::kPairedInputSingles;
 using thresholds::kPairedWithDisturbance;
+using thresholds::kRefinedBehindDisturbance;
 using thresholds::kRefinedDominantPlaces;
 using thresholds::kRefinedForwardPairs;
 using thresholds::kRefinedSingles;
@@ -64,7 +65,7 @@ bool several_places(Effect e) {
 // One effect's hypotheses: an input-side nonlinearity at each place it can sit
 // (placement.hpp), a linear effect with a form on the error at the input and there, any
 // other effect once.
-std::vector<Candidate> singles(Effect e, const Problem& pr, const Location& loc) {
+std::vector<Candidate> singles_of(Effect e, const Problem& pr, const Location& loc) {
   if (kind_of(e) == EffectKind::kLinear && effect_model(e).apply_on_error)
     return {placed_starts(e, Place::kInput, pr, loc), placed_starts(e, Place::kError, pr, loc)};
   if (kind_of(e) != EffectKind::kInputNonlinearity)
@@ -196,7 +197,11 @@ void research_at_onset(const Problem& pr, const std::vector<Candidate>& cands,
   rank(hs);
 }
 
-std::vector<Effect> applicable(const Problem& pr, const Location& loc, const DiagnoseOptions& o) {
+// The effects of the pool (all, or the options' list) that can be tried on this record:
+// input-side ones when the input tests failed, or the output was clipped, or `behind` (a
+// dominant disturbance may have hidden them, behind_disturbance below).
+std::vector<Effect> applicable(const Problem& pr, const Location& loc, const DiagnoseOptions& o,
+                               bool behind = false) {
   std::vector<Effect> out;
   const auto& pool =
       o.effects.empty() ? std::vector<Effect>(kAllEffects.begin(), kAllEffects.end()) : o.effects;
@@ -205,7 +210,8 @@ std::vector<Effect> applicable(const Problem& pr, const Location& loc, const Dia
     if (e == Effect::kLoadDamping && !dominant_mode(pr.tf)) continue;
     if (e == Effect::kPeriodicDisturbance && !loc.dist.periodic) continue;
     if (e == Effect::kDrift && !loc.dist.drift) continue;
-    if (kind_of(e) != EffectKind::kDisturbance && !loc.input_mismatch && loc.clip.side == 0)
+    if (kind_of(e) != EffectKind::kDisturbance && !loc.input_mismatch && loc.clip.side == 0 &&
+        !behind)
       continue;
     out.push_back(e);
   }
@@ -324,6 +330,32 @@ std::vector<Candidate> places_with_dominant(const Problem& pr,
   return out;
 }
 
+// When the input tests passed but a disturbance dominates the residual, its wander widened
+// their bounds and may hide an input-side effect (a rack stop behind the grid's wander): every
+// input-side effect at each place is paired with that disturbance, seeded from what it
+// leaves, screened, and the best few searched in full. The verdict asks such a pair to add
+// kUnseenInputGainPct to the disturbance alone (verdict.cpp).
+std::vector<HypothesisFit> behind_disturbance(const Problem& pr, const Location& loc,
+                                              const std::vector<HypothesisFit>& singles,
+                                              const Eigen::VectorXd& base,
+                                              const DiagnoseOptions& o) {
+  if (loc.input_mismatch || loc.clip.side != 0 || !o.try_pairs) return {};
+  const auto dist = std::find_if(singles.begin(), singles.end(),
+                                 [](const HypothesisFit& h) { return !has_input_side(h); });
+  if (dist == singles.end() || dist->score < kDominantDisturbanceGainPct) return {};
+  const Location left = locate(pr, dist->yhat);
+  std::vector<Candidate> cands;
+  for (Effect e : applicable(pr, loc, o, true)) {
+    if (kind_of(e) == EffectKind::kDisturbance) continue;
+    for (const Candidate& c : singles_of(e, pr, left)) {
+      Candidate paired;
+      for (const auto& start : c) paired.push_back({start.front(), dist->effects[0]});
+      cands.push_back(std::move(paired));
+    }
+  }
+  return screen_and_refine(pr, cands, base, o, kRefinedBehindDisturbance);
+}
+
 }  // namespace
 
 // The problem with the effects acting on h's span only (an onset found for h).
@@ -339,12 +371,18 @@ std::vector<HypothesisFit> search_hypotheses(const Problem& pr, const Location& 
                                              const DiagnoseOptions& o) {
   std::vector<Candidate> cands;
   for (Effect e : applicable(pr, loc, o))
-    for (auto& c : singles(e, pr, loc)) cands.push_back(std::move(c));
+    for (auto& c : singles_of(e, pr, loc)) cands.push_back(std::move(c));
   std::vector<HypothesisFit> hs = screen_and_refine(pr, cands, base, o);
   refine_onsets(pr, hs, base, o.fit);
   research_at_onset(pr, cands, hs, base, o);
   add_sensor_lag_twin(pr, hs, o.fit);
   rank(hs);
+  // Input tests passed: the pairs with the disturbance are the only ones.
+  if (auto behind = behind_disturbance(pr, loc, hs, base, o); !behind.empty()) {
+    for (auto& h : behind) hs.push_back(std::move(h));
+    rank(hs);
+    return hs;
+  }
   if (!o.try_pairs || hs.empty() || explains(pr, hs.front(), loc)) return hs;
   const std::vector<Candidate> paired = pair_candidates(pr, hs);
   std::vector<HypothesisFit> pairs = fit_all(pr, paired, base, o);

@@ -90,6 +90,16 @@ inline constexpr double kDominantDisturbanceGainPct = 3.0;
 // the disturbance) are screened; the best this many are then searched in full.
 inline constexpr std::size_t kRefinedDominantPlaces = 2;
 
+// When the input tests passed beside a dominant disturbance, every input-side effect is
+// paired with it (search.cpp behind_disturbance) and this many of the screened pairs are
+// searched in full ...
+inline constexpr std::size_t kRefinedBehindDisturbance = 3;
+// ... and such a pair is the verdict only when it adds this much to the disturbance alone:
+// the input tests saw nothing, so the evidence is the fit itself, and it must be clearly more
+// than noise (the same gain that makes a drift material). On gensim a rack stop behind the
+// grid's wander adds 6.6 points that the tests, their bounds widened by the wander, missed.
+inline constexpr double kUnseenInputGainPct = 3.0;
+
 // --- Drift materiality (diagnose.cpp) ---
 // A drift alone is material when its rms is at least this fraction of the input-driven
 // response's: a slow wander of a few kW on a set excited by +-3 % is the operating noise of

@@ -16,6 +16,7 @@ using thresholds::kDriftMaterialOfLevel;
 using thresholds::kNestedMarginPct;
 using thresholds::kNonlinearOverLinearPct;
 using thresholds::kOperatingLevelStds;
+using thresholds::kUnseenInputGainPct;
 
 // Every effect of h that needs the direction test's evidence has it (thresholds.hpp): on
 // the input's direction of motion, or for a loop in an output feedback (a hysteretic spring
@@ -54,18 +55,6 @@ bool pair_adds(const std::vector<HypothesisFit>& hs, const HypothesisFit& h) {
   return h.score - best >= kNestedMarginPct;
 }
 
-// The score of the same hypothesis without its input-side effects (0 when it has no
-// disturbance): what a pair's input-side half must add to.
-double disturbance_part_score(const std::vector<HypothesisFit>& hs, const HypothesisFit& h) {
-  double best = 0.0;
-  for (const auto& e : h.effects) {
-    if (kind_of(e.effect) != EffectKind::kDisturbance) continue;
-    for (const auto& g : hs)
-      if (g.effects.size() == 1 && g.effects[0].effect == e.effect) best = std::max(best, g.score);
-  }
-  return best;
-}
-
 // A drift alone is material when it is large against the input-driven response or the
 // operating level, or when modelling it raises the validation fit enough (thresholds.hpp).
 bool immaterial_drift(const HypothesisFit& h, const Problem& pr) {
@@ -88,9 +77,11 @@ bool sampling_convention_only(const HypothesisFit& h, const Problem& pr) {
 
 // The best hypothesis above min_gain; when the input tests failed, one with an input-side
 // effect that adds min_gain to what its disturbance alone explains, unless there is none
-// (then a disturbance alone explains it).
+// (then a disturbance alone explains it). When they passed (and the output was not clipped),
+// an input-side effect found behind a disturbance must add kUnseenInputGainPct to it.
 int choose_raw(const DiagnoseResult& r, double min_gain, bool linear_only = false) {
   const bool input = r.location.input_mismatch;
+  const bool unseen = !input && r.location.clip.side == 0;
   int best_any = -1;
   for (std::size_t i = 0; i < r.hypotheses.size(); ++i) {
     const auto& h = r.hypotheses[i];
@@ -100,6 +91,9 @@ int choose_raw(const DiagnoseResult& r, double min_gain, bool linear_only = fals
         !pair_adds(r.hypotheses, h))
       continue;
     if (immaterial_drift(h, r.problem) || sampling_convention_only(h, r.problem)) continue;
+    if (unseen && has_input_side(h) &&
+        h.score - disturbance_part_score(r.hypotheses, h) < kUnseenInputGainPct)
+      continue;
     if (best_any < 0) best_any = static_cast<int>(i);
     if (!input) return static_cast<int>(i);
     if (has_input_side(h) && h.score - disturbance_part_score(r.hypotheses, h) >= min_gain)
@@ -109,6 +103,18 @@ int choose_raw(const DiagnoseResult& r, double min_gain, bool linear_only = fals
 }
 
 }  // namespace
+
+// The score of the same hypothesis without its input-side effects (0 when it has no
+// disturbance): what a pair's input-side half must add to.
+double disturbance_part_score(const std::vector<HypothesisFit>& hs, const HypothesisFit& h) {
+  double best = 0.0;
+  for (const auto& e : h.effects) {
+    if (kind_of(e.effect) != EffectKind::kDisturbance) continue;
+    for (const auto& g : hs)
+      if (g.effects.size() == 1 && g.effects[0].effect == e.effect) best = std::max(best, g.score);
+  }
+  return best;
+}
 
 bool has_input_side(const HypothesisFit& h) {
   return std::any_of(h.effects.begin(), h.effects.end(), [](const AppliedEffect& e) {

@@ -18,6 +18,10 @@ bool has_nonlinearity(const HypothesisFit& h);
 // direction tests.
 bool could_be_verdict(const HypothesisFit& h, const Location& location, const DataScales& scales);
 
+// The best single score of h's disturbances (0 when it has none): what its input-side
+// effects must add to.
+double disturbance_part_score(const std::vector<HypothesisFit>& hypotheses, const HypothesisFit& h);
+
 // The index of the chosen hypothesis in r.hypotheses (ranked), -1 for none.
 int choose(const DiagnoseResult& r, double min_gain_pct);
 

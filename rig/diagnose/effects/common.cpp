@@ -6,6 +6,7 @@
 #include <cmath>
 
 #include "rig/diagnose/hypothesis_fit.hpp"
+#include "rig/diagnose/placement.hpp"
 #include "rig/diagnose/thresholds.hpp"
 
 namespace rig::diagnose::effects {
@@ -34,11 +35,23 @@ double recovery_hi_s(const DataScales& s) {
 }
 
 bool recovery_credible(const AppliedEffect& e, std::size_t i, const DataScales& s) {
+  if (e.place == Place::kPiLoop) return true;  // the PI's own integrator restores it there
   return e.params.size() <= i || e.params[i] < thresholds::kAtRecoveryBound * recovery_hi_s(s);
 }
 
-std::string in_loop_words(const std::vector<double>& p, std::size_t i, double dt_s) {
-  if (p.size() <= i || p[i] < 5.0 * dt_s) return "";
+std::string in_loop_words(const AppliedEffect& e, std::size_t i, const DataScales& s) {
+  const auto& p = e.params;
+  if (p.size() <= i) return "";
+  if (e.place == Place::kPiLoop) {
+    if (p[i] >= thresholds::kAtRecoveryBound * recovery_hi_s(s))
+      return ", the governor's integrator held while the limit acts (anti-windup)";
+    if (p[i] < 5.0 * s.dt_s) return ", the governor's integrator winding up against it";
+    return fmt::format(
+        ", the integrator's lost travel coming back with a time constant of {:.3g} s "
+        "(an anti-windup by back-calculation)",
+        p[i]);
+  }
+  if (p[i] < 5.0 * s.dt_s) return "";
   return fmt::format(
       ", inside an integrating loop (a governor integrator with anti-windup) that restores the "
       "lost position with a time constant of {:.3g} s",

@@ -48,11 +48,13 @@ double recovery_hi_s(const DataScales& s);
 // position hardly comes back within the record, so the fit reached for a slow,
 // level-dependent reshaping (an elasto-plastic loop, an AC coupling), not a limit whose
 // loop restores it (plantsim's and gensim's limits fit 2-5 s; at the bound only stand-ins
-// were seen, gensim seeds 1-2 and a PRBS hysteresis).
+// were seen, gensim seeds 1-2 and a PRBS hysteresis). After the governor's PI (pi_loop) its
+// integrator restores the lost position, and a recovery at the bound is the integrator held
+// at the limit (anti-windup, gensim's governor): credible there.
 bool recovery_credible(const AppliedEffect& e, std::size_t i, const DataScales& s);
 // A limit inside an integrating loop loses position that the loop restores slowly: the words
 // for recovery_s = p[i], empty for a plain limit.
-std::string in_loop_words(const std::vector<double>& p, std::size_t i, double dt_s);
+std::string in_loop_words(const AppliedEffect& e, std::size_t i, const DataScales& s);
 
 // The first-order lag shared by extra_lag (in the plant) and sensor_lag (in the transducer),
 // defined in extra_lag.cpp.

@@ -43,7 +43,7 @@ double step(const Params& p, StepState& s, double x, double, double dt_s) {
 std::string meaning(const AppliedEffect& e, const HypothesisFit&, const Problem& pr) {
   const auto& p = e.params;
   return fmt::format("the input cannot change faster than {:.3g} per second{}", p[0],
-                     effects::in_loop_words(p, 1, pr.dt_s));
+                     effects::in_loop_words(e, 1, pr.scales));
 }
 
 void to_plant(const PlantContext& c, PlantTarget& m) {

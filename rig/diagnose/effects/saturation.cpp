@@ -50,7 +50,7 @@ std::string meaning(const AppliedEffect& e, const HypothesisFit&, const Problem&
   return fmt::format(
       "the input is limited at +{:.3g} / -{:.3g} about the operating point "
       "({:.1f} / {:.1f} standard deviations){}",
-      p[0], p[1], p[0] / su, p[1] / su, effects::in_loop_words(p, 2, pr.dt_s));
+      p[0], p[1], p[0] / su, p[1] / su, effects::in_loop_words(e, 2, pr.scales));
 }
 
 // Limits about the recording's mean input u0 (the operating point diagnose removes): the

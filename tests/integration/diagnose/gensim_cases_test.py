@@ -14,6 +14,9 @@ these are the cases that pin a fixed behaviour:
   * an actuator hysteresis (Bouc-Wen, gensim's form) behind the transducer's declared AC
     coupling (benchmark seed 2, g043): only after the governor's PI, where the loop's
     integrator keeps working against it, does it fit better than a rack limit on the bias;
+  * a rack stop behind the grid's wander (benchmark seed 1, g074), which the input tests
+    miss behind it: found by pairing the input-side effects with the dominant drift, after
+    the governor's PI with its integrator held at the stop;
   * a fuel dead time (benchmark seed 1, g000): a linear effect, as a guard;
   * a null case with the set's operating nuisances (benchmark seed 1, g082): `none`.
 """
@@ -79,6 +82,15 @@ class GensimCases(unittest.TestCase):
         h = rep["hypotheses"][rep["chosen"]]
         self.assertEqual(h["effects"][0]["place"], "pi_loop", rep["explanation"])
         self.assertIn("after the governor's PI", rep["explanation"])
+        self.assertGreater(h["validation_fit_after"], h["validation_fit_before"])
+
+    def test_a_rack_stop_behind_the_grids_wander_is_found_by_its_fit(self):
+        _, rep, seed = self.run_case("saturation+drift", "large", "pair", 718527)
+        self.assertEqual(rep["verdict"], "saturation", f"seed {seed}: {rep['explanation']}")
+        self.assertFalse(rep["location"]["input_mismatch"], rep["explanation"])
+        h = rep["hypotheses"][rep["chosen"]]
+        self.assertEqual([e["effect"] for e in h["effects"]], ["saturation", "drift"])
+        self.assertIn("found no mismatch beside the disturbance", rep["explanation"])
         self.assertGreater(h["validation_fit_after"], h["validation_fit_before"])
 
     def test_a_longer_fuel_dead_time_is_a_dead_time(self):

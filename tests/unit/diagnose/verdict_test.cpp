@@ -1,6 +1,9 @@
 // The verdict's evidence rules (diagnose.cpp choose, docs/diagnose.md step 4): what a fitted
 // value must show before it is named, an effect present from an onset, the output's
-// direction of motion and the input tests behind a drift.
+// direction of motion and the input tests behind a drift, and an effect behind a wander that
+// the input tests miss.
+#include "rig/diagnose/verdict.hpp"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -12,6 +15,7 @@
 #include "rig/diagnose/diagnose.hpp"
 #include "rig/diagnose/effect_registry.hpp"
 #include "rig/diagnose/placement.hpp"
+#include "rig/diagnose/search.hpp"
 #include "rig/diagnose/split.hpp"
 
 namespace rig::diagnose {
@@ -26,6 +30,14 @@ Location located(const DiagnoseInput& in) {
   Eigen::Index warm = 0;
   const Problem pr = prepare_problem(in, &blocks, &warm);
   return locate(pr, model_output(pr, {}).yhat);
+}
+
+// A wander of the output: integrated noise smoothed over 5 s, `times` the response's rms.
+Eigen::VectorXd wander(const Eigen::VectorXd& z, double times, std::uint64_t seed, double dt_s) {
+  Eigen::VectorXd drift = white(z.size(), 1.0, seed);
+  for (Eigen::Index i = 1; i < drift.size(); ++i) drift(i) += drift(i - 1);
+  drift = smooth_zero_phase(drift, 5.0, dt_s);
+  return drift * (times * rms(z) / rms(drift));
 }
 
 TEST(Verdict, APeakAtItsDampingBoundIsNoEvidenceOfAMode) {
@@ -51,6 +63,9 @@ TEST(Verdict, ALimiterWhoseRecoveryStoppedAtItsBoundIsNoEvidenceOfALimit) {
   EXPECT_TRUE(sat({Effect::kSaturation, {0.4, 0.7, 0.01}}, s));  // a plain limit
   EXPECT_FALSE(rate({Effect::kRateLimit, {5.0, 11.9}}, s));
   EXPECT_TRUE(rate({Effect::kRateLimit, {5.0, 2.0}}, s));
+  // After the governor's PI its integrator restores the position: a recovery at the bound is
+  // the integrator held at the stop (anti-windup).
+  EXPECT_TRUE(sat({Effect::kSaturation, {0.4, 0.7, 12.0}, Place::kPiLoop, {0.25, 0.05}}, s));
 }
 
 TEST(Verdict, ARateLimitFromHalfWayIsFoundInTheLoopFromItsOnset) {
@@ -96,17 +111,54 @@ TEST(Verdict, AnInputEffectBehindALargeDriftIsStillLocated) {
   DiagnoseInput in = null_record(47);
   const Eigen::VectorXd u = in.u.array() - in.u.mean();
   const Eigen::VectorXd z = model::simulate(in.model, deadband(u, 0.5 * rms(u)), in.dt_s);
-  // A wander of the output (integrated noise smoothed over 5 s) twice the response's rms.
-  Eigen::VectorXd drift = white(z.size(), 1.0, 13);
-  for (Eigen::Index i = 1; i < drift.size(); ++i) drift(i) += drift(i - 1);
-  drift = smooth_zero_phase(drift, 5.0, in.dt_s);
-  drift *= 2.0 * rms(z) / rms(drift);
-  in.y = z + drift + white(z.size(), 0.05 * rms(z), 14);
+  in.y = z + wander(z, 2.0, 13, in.dt_s) + white(z.size(), 0.05 * rms(z), 14);
   const Location loc = located(in);
   EXPECT_TRUE(loc.dist.drift);
   EXPECT_TRUE(loc.input_mismatch);
   const DiagnoseResult r = diagnose(in);
   EXPECT_EQ(r.verdict, "deadband") << r.explanation;
+}
+
+// The search and the verdict when the input tests passed beside a dominant wander (their
+// bounds widened by it; gensim's rack stop behind the grid's wander): the input-side effects
+// are paired with the drift, and one is named when it adds kUnseenInputGainPct to the drift
+// alone. The location is the record's own with its input tests marked passed.
+DiagnoseResult behind_wander(const DiagnoseInput& in) {
+  DiagnoseResult r;
+  int blocks = 0;
+  Eigen::Index warm = 0;
+  r.problem = prepare_problem(in, &blocks, &warm);
+  const Eigen::VectorXd base = model_output(r.problem, {}).yhat;
+  r.location = locate(r.problem, base);
+  r.location.input_mismatch = false;
+  r.hypotheses = search_hypotheses(r.problem, r.location, base, DiagnoseOptions{});
+  r.chosen_index = choose(r, thresholds::kMinGainPct);
+  return r;
+}
+
+TEST(Verdict, ALimitTheInputTestsMissBehindAWanderIsFoundByItsFit) {
+  DiagnoseInput in = null_record(48);
+  const Eigen::VectorXd u = in.u.array() - in.u.mean();
+  const Eigen::VectorXd z0 = model::simulate(in.model, u, in.dt_s);
+  const Eigen::VectorXd noise = wander(z0, 3.0, 15, in.dt_s) + white(z0.size(), 0.1 * rms(z0), 16);
+  // A one-sided limit (a rack stop) at half a standard deviation of the bias.
+  const Eigen::VectorXd z =
+      model::simulate(in.model, saturate(u, -10.0 * rms(u), 0.5 * rms(u)), in.dt_s);
+  in.y = z + noise;
+  const DiagnoseResult r = behind_wander(in);
+  ASSERT_TRUE(r.location.dist.drift);
+  ASSERT_NE(r.chosen(), nullptr);
+  EXPECT_EQ(r.chosen()->effects.size(), 2u);
+  EXPECT_EQ(r.chosen()->effects[0].effect, Effect::kSaturation);
+  EXPECT_EQ(r.chosen()->effects[1].effect, Effect::kDrift);
+  EXPECT_GE(r.chosen()->score - disturbance_part_score(r.hypotheses, *r.chosen()),
+            thresholds::kUnseenInputGainPct);
+  // The same wander on the nominal response: the drift alone, or nothing.
+  in.y = z0 + noise;
+  const DiagnoseResult null = behind_wander(in);
+  if (null.chosen()) {
+    EXPECT_FALSE(has_input_side(*null.chosen())) << null.chosen()->name();
+  }
 }
 
 }  // namespace
