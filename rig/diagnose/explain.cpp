@@ -2,6 +2,7 @@
 // effect means physically, and what adding it does to the validation fit, with numbers.
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 #include <string>
@@ -133,22 +134,41 @@ std::string clip_words(const DiagnoseResult& r) {
       c.samples, c.level, c.side > 0 ? "highest" : "lowest");
 }
 
+// What the search behind a dominant disturbance (search.cpp) found, when it named nothing.
+std::string unseen_input_words(const DiagnoseResult& r, const HypothesisFit& dist) {
+  const auto best = std::find_if(r.hypotheses.begin(), r.hypotheses.end(),
+                                 [](const HypothesisFit& g) { return has_input_side(g); });
+  if (best == r.hypotheses.end()) return "";
+  return fmt::format(
+      " The best input-side effect fitted beside it ({}) adds {:.1f} points of validation "
+      "score to it, less than the {:.1f} asked when the input tests found nothing.",
+      verdict_of(*best), best->score - dist.score, thresholds::kUnseenInputGainPct);
+}
+
 std::string negligible_disturbance(const DiagnoseResult& r) {
-  if (!r.location.disturbance || r.hypotheses.empty()) return "";
-  const HypothesisFit& h = r.hypotheses.front();
+  if (!r.location.disturbance) return "";
+  const auto it = std::find_if(r.hypotheses.begin(), r.hypotheses.end(),
+                               [](const HypothesisFit& g) { return !has_input_side(g); });
+  if (it == r.hypotheses.end()) return "";
+  const HypothesisFit& h = *it;
   if (h.name() == "drift")
     return fmt::format(
-        " A slow drift of rms {:.3g} ({:.0f} % of the input-driven response, {:.2f} % of the "
-        "output's mean level) was detected in the residual: the operating noise of a running "
-        "set, not a missing effect (modelling it: validation fit {:.1f} % -> {:.1f} %).",
-        derived(h, "drift_rms"), 100.0 * derived(h, "drift_rms") / r.problem.scales.z_std,
-        r.problem.y_level != 0.0 ? 100.0 * derived(h, "drift_rms") / std::abs(r.problem.y_level)
-                                 : 0.0,
-        h.validation_fit_before, h.validation_fit_after);
+               " A slow drift of rms {:.3g} ({:.0f} % of the input-driven response, {:.2f} % of "
+               "the "
+               "output's mean level) was detected in the residual: the operating noise of a "
+               "running "
+               "set, not a missing effect (modelling it: validation fit {:.1f} % -> {:.1f} %).",
+               derived(h, "drift_rms"), 100.0 * derived(h, "drift_rms") / r.problem.scales.z_std,
+               r.problem.y_level != 0.0
+                   ? 100.0 * derived(h, "drift_rms") / std::abs(r.problem.y_level)
+                   : 0.0,
+               h.validation_fit_before, h.validation_fit_after) +
+           unseen_input_words(r, h);
   return fmt::format(
-      " A periodic component was detected in the residual, but modelling it changes the "
-      "validation fit only from {:.1f} % to {:.1f} %: not material.",
-      h.validation_fit_before, h.validation_fit_after);
+             " A periodic component was detected in the residual, but modelling it changes the "
+             "validation fit only from {:.1f} % to {:.1f} %: not material.",
+             h.validation_fit_before, h.validation_fit_after) +
+         unseen_input_words(r, h);
 }
 
 // Another explanation that fits about as well (verdict.hpp close_alternative), if any.
@@ -231,6 +251,8 @@ std::string explain(const DiagnoseResult& r) {
       "Diagnosis: {}. Adding it raises the validation fit from {:.1f} % to {:.1f} % "
       "(estimation {:.1f} % to {:.1f} %).",
       what, h->validation_fit_before, h->validation_fit_after, h->fit_before, h->fit_after);
+  if (!r.location.input_mismatch && r.location.clip.side == 0 && !has_input_side(*h))
+    s += unseen_input_words(r, *h);
   return s + alternative_words(r);
 }
 

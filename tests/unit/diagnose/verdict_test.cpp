@@ -156,9 +156,14 @@ TEST(Verdict, ALimitTheInputTestsMissBehindAWanderIsFoundByItsFit) {
   // The same wander on the nominal response: the drift alone, or nothing.
   in.y = z0 + noise;
   const DiagnoseResult null = behind_wander(in);
-  if (null.chosen()) {
-    EXPECT_FALSE(has_input_side(*null.chosen())) << null.chosen()->name();
-  }
+  ASSERT_NE(null.chosen(), nullptr);  // the wander is material here (no operating level)
+  EXPECT_FALSE(has_input_side(*null.chosen())) << null.chosen()->name();
+  // The explanation says what the search behind it found and why it is not named.
+  DiagnoseResult said = null;
+  said.verdict = verdict_of(*null.chosen());
+  EXPECT_NE(explain(said).find("less than the 3.0 asked when the input tests found nothing"),
+            std::string::npos)
+      << explain(said);
 }
 
 }  // namespace
