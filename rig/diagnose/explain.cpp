@@ -135,14 +135,16 @@ std::string clip_words(const DiagnoseResult& r) {
 }
 
 // What the search behind a dominant disturbance (search.cpp) found, when it named nothing.
-std::string unseen_input_words(const DiagnoseResult& r, const HypothesisFit& dist) {
+std::string unseen_input_words(const DiagnoseResult& r) {
   const auto best = std::find_if(r.hypotheses.begin(), r.hypotheses.end(),
                                  [](const HypothesisFit& g) { return has_input_side(g); });
   if (best == r.hypotheses.end()) return "";
   return fmt::format(
-      " The best input-side effect fitted beside it ({}) adds {:.1f} points of validation "
-      "score to it, less than the {:.1f} asked when the input tests found nothing.",
-      verdict_of(*best), best->score - dist.score, thresholds::kUnseenInputGainPct);
+      " The best input-side effect fitted beside the disturbance ({}) adds {:.1f} points "
+      "of validation score to it, less than the {:.1f} asked when the input tests found "
+      "nothing.",
+      verdict_of(*best), best->score - disturbance_part_score(r.hypotheses, *best),
+      thresholds::kUnseenInputGainPct);
 }
 
 std::string negligible_disturbance(const DiagnoseResult& r) {
@@ -163,12 +165,12 @@ std::string negligible_disturbance(const DiagnoseResult& r) {
                    ? 100.0 * derived(h, "drift_rms") / std::abs(r.problem.y_level)
                    : 0.0,
                h.validation_fit_before, h.validation_fit_after) +
-           unseen_input_words(r, h);
+           unseen_input_words(r);
   return fmt::format(
              " A periodic component was detected in the residual, but modelling it changes the "
              "validation fit only from {:.1f} % to {:.1f} %: not material.",
              h.validation_fit_before, h.validation_fit_after) +
-         unseen_input_words(r, h);
+         unseen_input_words(r);
 }
 
 // Another explanation that fits about as well (verdict.hpp close_alternative), if any.
@@ -252,7 +254,7 @@ std::string explain(const DiagnoseResult& r) {
       "(estimation {:.1f} % to {:.1f} %).",
       what, h->validation_fit_before, h->validation_fit_after, h->fit_before, h->fit_after);
   if (!r.location.input_mismatch && r.location.clip.side == 0 && !has_input_side(*h))
-    s += unseen_input_words(r, *h);
+    s += unseen_input_words(r);
   return s + alternative_words(r);
 }
 

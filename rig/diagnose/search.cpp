@@ -1,15 +1,12 @@
 #include "rig/diagnose/search.hpp"
 
 #include <algorithm>
-#include <atomic>
 #include <cmath>
-#include <numbers>
 #include <optional>
-#include <thread>
-#include <type_traits>
 
 #include "rig/diagnose/effect_registry.hpp"
 #include "rig/diagnose/placement.hpp"
+#include "rig/diagnose/screen.hpp"
 #include "rig/diagnose/split.hpp"
 #include "rig/diagnose/verdict.hpp"
 
@@ -22,13 +19,6 @@ using thresholds::kPairedWithDisturbance;
 using thresholds::kRefinedBehindDisturbance;
 using thresholds::kRefinedDominantPlaces;
 using thresholds::kRefinedForwardPairs;
-using thresholds::kRefinedSingles;
-using thresholds::kScreenEvaluations;
-using thresholds::kScreenMaxDecimation;
-using thresholds::kScreenMinSamples;
-using thresholds::kScreenOversampling;
-
-using Candidate = std::vector<std::vector<AppliedEffect>>;  // starting points of one hypothesis
 
 // Places that hold one effect only (one front lag, one feedback path, one error loop).
 bool one_per_record(Place p) {
@@ -48,12 +38,6 @@ bool pairable(const AppliedEffect& a, const AppliedEffect& b) {
   };
   if (error_loop(a) && error_loop(b)) return false;
   return !((error_loop(a) && loop(b)) || (error_loop(b) && loop(a)));
-}
-
-void rank(std::vector<HypothesisFit>& hs) {
-  std::stable_sort(hs.begin(), hs.end(), [](const HypothesisFit& a, const HypothesisFit& b) {
-    return a.score > b.score;
-  });
 }
 
 // Whether an effect is tried at more than one place (singles below).
@@ -82,80 +66,6 @@ std::vector<Candidate> singles_of(Effect e, const Problem& pr, const Location& l
     out.push_back(placed_starts(e, place, pr, loc));
   }
   return out;
-}
-
-std::vector<HypothesisFit> fit_all(const Problem& pr, const std::vector<Candidate>& cands,
-                                   const Eigen::VectorXd& base, const DiagnoseOptions& o) {
-  std::vector<HypothesisFit> out(cands.size());
-  std::atomic<std::size_t> next{0};
-  auto work = [&] {
-    for (std::size_t i = next++; i < cands.size(); i = next++)
-      out[i] = fit_hypothesis(pr, cands[i], base, o.fit);
-  };
-  std::vector<std::thread> pool;
-  for (int t = 1; t < std::max(1, o.threads); ++t) pool.emplace_back(work);
-  work();
-  for (auto& t : pool) t.join();
-  return out;
-}
-
-// The screen's decimation: keep kScreenOversampling samples per period of the highest
-// excited frequency, at most kScreenMaxDecimation, none for a short record.
-int screen_decimation(const Problem& pr) {
-  if (pr.u.size() < kScreenMinSamples) return 1;
-  double band_hz = 0.0;  // the input's band: its rate over its rms, as a frequency
-  band_hz = pr.scales.u_rate_std / (2.0 * std::numbers::pi * std::max(pr.scales.u_std, 1e-300));
-  const int f =
-      static_cast<int>(std::floor(1.0 / (pr.dt_s * kScreenOversampling * std::max(band_hz, 1e-9))));
-  return std::clamp(f, 1, kScreenMaxDecimation);
-}
-
-// Every f-th sample of the problem (the input and output as recorded, the weights and
-// spans with them), its derived fields rebuilt.
-Problem decimated(const Problem& pr, int f) {
-  if (f <= 1) return pr;
-  Problem out = pr;
-  const Eigen::Index n = (pr.u.size() + f - 1) / f;
-  auto pick = [&](const auto& x) {
-    std::decay_t<decltype(x)> y(n);
-    for (Eigen::Index i = 0; i < n; ++i) y(i) = x(i * f);
-    return y;
-  };
-  out.u = pick(pr.u);
-  out.y = pick(pr.y);
-  out.est_weight = pick(pr.est_weight);
-  out.val_weight = pick(pr.val_weight);
-  out.dt_s = pr.dt_s * f;
-  out.active_from = pr.active_from / f;
-  out.active_to = pr.active_to < 0 ? -1 : (pr.active_to + f - 1) / f;
-  out.level_shift_at = pr.level_shift_at < 0 ? -1 : pr.level_shift_at / f;
-  out.level_step_removed_at = pr.level_step_removed_at < 0 ? -1 : pr.level_step_removed_at / f;
-  finish_problem(out);
-  return out;
-}
-
-// Every single hypothesis is fitted with a short search (a screen), and the best few are
-// then searched in full from where the screen stopped (thresholds.hpp).
-std::vector<HypothesisFit> screen_and_refine(const Problem& pr, const std::vector<Candidate>& cands,
-                                             const Eigen::VectorXd& base, const DiagnoseOptions& o,
-                                             std::size_t refine = kRefinedSingles) {
-  DiagnoseOptions screen = o;
-  screen.fit.max_evaluations = std::min(o.fit.max_evaluations, kScreenEvaluations);
-  const Problem coarse = decimated(pr, screen_decimation(pr));
-  std::vector<HypothesisFit> hs = fit_all(coarse, cands, model_output(coarse, {}).yhat, screen);
-  rank(hs);
-  const std::size_t k = std::min(hs.size(), refine);
-  std::vector<Candidate> best;
-  for (std::size_t i = 0; i < k; ++i) best.push_back({hs[i].effects});
-  std::vector<HypothesisFit> refined = fit_all(pr, best, base, o);
-  for (std::size_t i = 0; i < hs.size(); ++i) {
-    const int screened = hs[i].evaluations;
-    hs[i] = i < k ? std::move(refined[i]) : score_hypothesis(pr, hs[i].effects, base, o.fit);
-    hs[i].evaluations += screened;
-    hs[i].screened_only = i >= k;
-  }
-  rank(hs);
-  return hs;
 }
 
 bool gated(const Problem& pr, const HypothesisFit& h) {
@@ -330,6 +240,22 @@ std::vector<Candidate> places_with_dominant(const Problem& pr,
   return out;
 }
 
+// A line and a drift both detected: the line fitted beside the drift (its single, fitted
+// without it, is ranked by the wander; a torque ripple behind the grid's wander).
+std::vector<HypothesisFit> both_disturbances(const Problem& pr,
+                                             const std::vector<HypothesisFit>& singles,
+                                             const Eigen::VectorXd& base,
+                                             const DiagnoseOptions& o) {
+  const auto single = [&](Effect e) {
+    return std::find_if(singles.begin(), singles.end(), [e](const HypothesisFit& h) {
+      return h.effects.size() == 1 && h.effects[0].effect == e;
+    });
+  };
+  const auto line = single(Effect::kPeriodicDisturbance), drift = single(Effect::kDrift);
+  if (line == singles.end() || drift == singles.end()) return {};
+  return fit_all(pr, {{{line->effects[0], drift->effects[0]}}}, base, o);
+}
+
 // When the input tests passed but a disturbance dominates the residual, its wander widened
 // their bounds and may hide an input-side effect (a rack stop behind the grid's wander): every
 // input-side effect at each place is paired with that disturbance, seeded from what it
@@ -377,13 +303,18 @@ std::vector<HypothesisFit> search_hypotheses(const Problem& pr, const Location& 
   research_at_onset(pr, cands, hs, base, o);
   add_sensor_lag_twin(pr, hs, o.fit);
   rank(hs);
-  // Input tests passed: the pairs with the disturbance are the only ones.
-  if (auto behind = behind_disturbance(pr, loc, hs, base, o); !behind.empty()) {
-    for (auto& h : behind) hs.push_back(std::move(h));
+  // Added last: the pair searches below take the singles' disturbances one at a time.
+  std::vector<HypothesisFit> lines = both_disturbances(pr, hs, base, o);
+  const auto done = [&](std::vector<HypothesisFit> more) {
+    for (auto* add : {&more, &lines})
+      for (auto& h : *add) hs.push_back(std::move(h));
     rank(hs);
     return hs;
-  }
-  if (!o.try_pairs || hs.empty() || explains(pr, hs.front(), loc)) return hs;
+  };
+  // Input tests passed: the pairs with the disturbance are the only ones.
+  if (auto behind = behind_disturbance(pr, loc, hs, base, o); !behind.empty())
+    return done(std::move(behind));
+  if (!o.try_pairs || hs.empty() || explains(pr, hs.front(), loc)) return done({});
   const std::vector<Candidate> paired = pair_candidates(pr, hs);
   std::vector<HypothesisFit> pairs = fit_all(pr, paired, base, o);
   std::vector<Candidate> tried = paired;
@@ -395,9 +326,7 @@ std::vector<HypothesisFit> search_hypotheses(const Problem& pr, const Location& 
   for (auto& h :
        screen_and_refine(pr, places_with_dominant(pr, hs, tried), base, o, kRefinedDominantPlaces))
     pairs.push_back(std::move(h));
-  for (auto& h : pairs) hs.push_back(std::move(h));
-  rank(hs);
-  return hs;
+  return done(std::move(pairs));
 }
 
 }  // namespace rig::diagnose

@@ -41,7 +41,7 @@ inline constexpr double kNestedMarginPct = 1.0;
 // |z| 2.8-8.7 (2.8 the one present in half the record), every deadband case 0.2-1.5.
 inline constexpr double kDirectionEvidenceZ = 3.0;
 
-// --- Speed: screening the singles (diagnose.cpp) ---
+// --- Speed: screening the singles (screen.cpp) ---
 // Every single hypothesis (each effect at each place: about 35) is first searched with at
 // most this many simulations per starting point ...
 inline constexpr int kScreenEvaluations = 30;

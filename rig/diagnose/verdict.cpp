@@ -57,14 +57,20 @@ bool pair_adds(const std::vector<HypothesisFit>& hs, const HypothesisFit& h) {
 
 // A drift alone is material when it is large against the input-driven response or the
 // operating level, or when modelling it raises the validation fit enough (thresholds.hpp).
+// Against the level it is judged on the half of the record where it is larger: a wander
+// from half-way is as large there as a steady one of that rms.
 bool immaterial_drift(const HypothesisFit& h, const Problem& pr) {
   if (h.effects.size() != 1 || h.effects[0].effect != Effect::kDrift) return false;
-  double rms = 0.0;
-  for (const auto& [name, value] : h.derived)
+  double rms = 0.0, worst_half = 0.0;
+  for (const auto& [name, value] : h.derived) {
     if (name == "drift_rms") rms = value;
+    if (name == "drift_rms_worst_half") worst_half = value;
+  }
   const double y_std = std::sqrt(pr.y.squaredNorm() / std::max<double>(1.0, pr.y.size()));
   const double level = std::abs(pr.y_level);
-  if (level > kOperatingLevelStds * y_std && rms < kDriftMaterialOfLevel * level) return true;
+  if (level > kOperatingLevelStds * y_std &&
+      std::max(rms, worst_half) < kDriftMaterialOfLevel * level)
+    return true;
   if (h.validation_fit_after - h.validation_fit_before >= kDriftMaterialGainPct) return false;
   return rms < kDriftMaterialFraction * pr.scales.z_std;
 }
@@ -189,6 +195,10 @@ int close_alternative(const DiagnoseResult& r) {
     if (g.score < h->score - thresholds::kCloseAlternativePct) break;  // ranked
     if (static_cast<int>(j) == r.chosen_index || !has_input_side(g) ||
         family(verdict_of(g)) == word || !could_be_verdict(g, r.location, r.problem.scales))
+      continue;
+    // Behind a disturbance the input tests missed, only what the verdict would name.
+    if (!r.location.input_mismatch && r.location.clip.side == 0 &&
+        g.score - disturbance_part_score(r.hypotheses, g) < kUnseenInputGainPct)
       continue;
     return static_cast<int>(j);
   }

@@ -28,6 +28,14 @@ void after_fit(const Problem& pr, const Params& p, Eigen::VectorXd& yhat, Derive
   const Eigen::VectorXd d = smooth_zero_phase(pr.y - yhat, p[0], pr.dt_s);
   yhat += d;
   derived.emplace_back("drift_rms", std::sqrt(d.array().square().mean()));
+  // A drift present in part of the record is judged where it is (verdict.cpp): the larger
+  // of the two halves' rms.
+  const Eigen::Index half = d.size() / 2;
+  const auto rms_of = [](const auto& x) {
+    return x.size() ? std::sqrt(x.array().square().mean()) : 0.0;
+  };
+  derived.emplace_back("drift_rms_worst_half",
+                       std::max(rms_of(d.head(half)), rms_of(d.tail(d.size() - half))));
 }
 
 std::string meaning(const AppliedEffect& e, const HypothesisFit& h, const Problem&) {

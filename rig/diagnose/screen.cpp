@@ -1,0 +1,102 @@
+#include "rig/diagnose/screen.hpp"
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <numbers>
+#include <thread>
+#include <type_traits>
+
+#include "rig/diagnose/split.hpp"
+
+namespace rig::diagnose {
+namespace {
+
+using thresholds::kScreenEvaluations;
+using thresholds::kScreenMaxDecimation;
+using thresholds::kScreenMinSamples;
+using thresholds::kScreenOversampling;
+
+// The screen's decimation: keep kScreenOversampling samples per period of the highest
+// excited frequency, at most kScreenMaxDecimation, none for a short record.
+int screen_decimation(const Problem& pr) {
+  if (pr.u.size() < kScreenMinSamples) return 1;
+  double band_hz = 0.0;  // the input's band: its rate over its rms, as a frequency
+  band_hz = pr.scales.u_rate_std / (2.0 * std::numbers::pi * std::max(pr.scales.u_std, 1e-300));
+  const int f =
+      static_cast<int>(std::floor(1.0 / (pr.dt_s * kScreenOversampling * std::max(band_hz, 1e-9))));
+  return std::clamp(f, 1, kScreenMaxDecimation);
+}
+
+// Every f-th sample of the problem (the input and output as recorded, the weights and
+// spans with them), its derived fields rebuilt.
+Problem decimated(const Problem& pr, int f) {
+  if (f <= 1) return pr;
+  Problem out = pr;
+  const Eigen::Index n = (pr.u.size() + f - 1) / f;
+  auto pick = [&](const auto& x) {
+    std::decay_t<decltype(x)> y(n);
+    for (Eigen::Index i = 0; i < n; ++i) y(i) = x(i * f);
+    return y;
+  };
+  out.u = pick(pr.u);
+  out.y = pick(pr.y);
+  out.est_weight = pick(pr.est_weight);
+  out.val_weight = pick(pr.val_weight);
+  out.dt_s = pr.dt_s * f;
+  out.active_from = pr.active_from / f;
+  out.active_to = pr.active_to < 0 ? -1 : (pr.active_to + f - 1) / f;
+  out.level_shift_at = pr.level_shift_at < 0 ? -1 : pr.level_shift_at / f;
+  out.level_step_removed_at = pr.level_step_removed_at < 0 ? -1 : pr.level_step_removed_at / f;
+  finish_problem(out);
+  return out;
+}
+
+}  // namespace
+
+void rank(std::vector<HypothesisFit>& hs) {
+  std::stable_sort(hs.begin(), hs.end(), [](const HypothesisFit& a, const HypothesisFit& b) {
+    return a.score > b.score;
+  });
+}
+
+std::vector<HypothesisFit> fit_all(const Problem& pr, const std::vector<Candidate>& cands,
+                                   const Eigen::VectorXd& base, const DiagnoseOptions& o) {
+  std::vector<HypothesisFit> out(cands.size());
+  std::atomic<std::size_t> next{0};
+  auto work = [&] {
+    for (std::size_t i = next++; i < cands.size(); i = next++)
+      out[i] = fit_hypothesis(pr, cands[i], base, o.fit);
+  };
+  std::vector<std::thread> pool;
+  for (int t = 1; t < std::max(1, o.threads); ++t) pool.emplace_back(work);
+  work();
+  for (auto& t : pool) t.join();
+  return out;
+}
+
+// Every single hypothesis is fitted with a short search (a screen), and the best few are
+// then searched in full from where the screen stopped (thresholds.hpp).
+std::vector<HypothesisFit> screen_and_refine(const Problem& pr, const std::vector<Candidate>& cands,
+                                             const Eigen::VectorXd& base, const DiagnoseOptions& o,
+                                             std::size_t refine) {
+  DiagnoseOptions screen = o;
+  screen.fit.max_evaluations = std::min(o.fit.max_evaluations, kScreenEvaluations);
+  const Problem coarse = decimated(pr, screen_decimation(pr));
+  std::vector<HypothesisFit> hs = fit_all(coarse, cands, model_output(coarse, {}).yhat, screen);
+  rank(hs);
+  const std::size_t k = std::min(hs.size(), refine);
+  std::vector<Candidate> best;
+  for (std::size_t i = 0; i < k; ++i) best.push_back({hs[i].effects});
+  std::vector<HypothesisFit> refined = fit_all(pr, best, base, o);
+  for (std::size_t i = 0; i < hs.size(); ++i) {
+    const int screened = hs[i].evaluations;
+    hs[i] = i < k ? std::move(refined[i]) : score_hypothesis(pr, hs[i].effects, base, o.fit);
+    hs[i].evaluations += screened;
+    hs[i].screened_only = i >= k;
+  }
+  rank(hs);
+  return hs;
+}
+
+}  // namespace rig::diagnose
