@@ -416,6 +416,9 @@ class Governor:
         with self.lock:
             t = now()
             self.advance_to(t)
+            # The rules at t before the write: a fault that struck since the last tick (revoked)
+            # is the governor's own step, not the write's.
+            self._update_rules(t)
             self.writes += 1
             before = self.applied_pct
             for i, v in enumerate(values):
