@@ -1,6 +1,7 @@
 #include "rig/diagnose/diagnose.hpp"
 
 #include <chrono>
+#include <cmath>
 #include <optional>
 
 #include "rig/diagnose/search.hpp"
@@ -37,6 +38,15 @@ ModelOutput locate_baseline(Problem& pr, DiagnoseResult& r) {
   r.fit_before_pct = weighted_fit_pct(pr.y, base.yhat, used);
   r.validation_fit_before_pct = weighted_fit_pct(pr.y, base.yhat, pr.val_weight);
   r.location = locate(pr, base.yhat);
+  if (step) {
+    // The level before the step (y_level is the recorded mean over the whole record).
+    const double after = 1.0 - *r.level_shift_time_s / pr.scales.duration_s;
+    const double level = pr.y_level - *step * after;
+    if (std::abs(level) > 0.0) {
+      r.location.step_gain = locate_step_gain(pr, pr.y - base.yhat, base.yhat, 1.0 + *step / level);
+      if (r.location.step_gain.fires) r.location.input_mismatch = true;
+    }
+  }
   return base;
 }
 
@@ -86,7 +96,8 @@ DiagnoseResult diagnose(const DiagnoseInput& in, const DiagnoseOptions& o) {
   }
   const ModelOutput base = locate_baseline(pr, r);
   gate_to_windows(pr, r.location);
-  if (r.location.worth_searching()) r.hypotheses = search_hypotheses(pr, r.location, base.yhat, o);
+  r.hypotheses = r.location.worth_searching() ? search_hypotheses(pr, r.location, base.yhat, o)
+                                              : blind_search(pr, r.location, base.yhat, o);
   r.chosen_index = choose(r, o.min_gain_pct);
   // A verdict's parameters come from a full search, also when the procedure chose one the
   // screen ranked below the refined few.
@@ -97,9 +108,9 @@ DiagnoseResult diagnose(const DiagnoseInput& in, const DiagnoseOptions& o) {
     h.evaluations += screened;
   }
   if (r.chosen_index >= 0) keep_pair_estimate(r, base.yhat, o);
-  // A disturbance alone (or a clip) that no hypothesis makes worth its parameters is not
-  // material.
-  if (!r.location.input_mismatch && (!r.location.worth_searching() || !r.chosen())) {
+  // Nothing the input tests found, and nothing worth its parameters (a disturbance alone, a
+  // clip, the blind search's best): not material.
+  if (!r.location.input_mismatch && !r.chosen()) {
     r.verdict = "none";
   } else {
     r.verdict = r.chosen() ? verdict_of(*r.chosen()) : "unexplained";

@@ -102,6 +102,35 @@ std::string what_effect_means(const AppliedEffect& e, const HypothesisFit& h, co
   return s;
 }
 
+// What the response says about the step (locate.hpp StepGain).
+std::string step_gain_words(const StepGain& g) {
+  if (!g.tested) return "";
+  const std::string measured =
+      fmt::format("The input-driven response after the step is x{:.3f} +- {:.3f} of that before it",
+                  1.0 + g.change, g.sd);
+  if (g.fires)
+    return measured + fmt::format(
+                          " (z = {:.1f}), as the level's x{:.3f} says: a measurement gain with the "
+                          "level in it changed, not the operating point. ",
+                          g.z, g.level_ratio);
+  const bool agrees =
+      std::abs(g.change - (g.level_ratio - 1.0)) <= thresholds::kStepGainAgreeSds * g.sd;
+  if (std::abs(g.z) > thresholds::kStepGainZ)
+    return measured + fmt::format(
+                          ", not the level's x{:.3f}: the operating point changed, and "
+                          "the gain with it. ",
+                          g.level_ratio);
+  if (!agrees)
+    return measured + fmt::format(
+                          ", which rules out a gain change of x{:.3f} with the level in "
+                          "it: the operating point changed. ",
+                          g.level_ratio);
+  return measured + fmt::format(
+                        ", consistent with a gain change of x{:.3f} but not by itself "
+                        "significant (|z| = {:.1f}, the bound is {:.0f}). ",
+                        g.level_ratio, std::abs(g.z), thresholds::kStepGainZ);
+}
+
 // An operating-point step found in the recording (find_level_shift).
 std::string level_shift_words(const DiagnoseResult& r) {
   if (!r.level_shift_time_s) return "";
@@ -116,9 +145,11 @@ std::string level_shift_words(const DiagnoseResult& r) {
                 100.0 * r.level_shift / level, level, 1.0 + r.level_shift / level)
           : "";
   return fmt::format(
-      "The recorded level steps by {:+.4g} at {:.1f} s{} (an operating-point change, or a gain "
-      "that changed with the operating point in it); the step is taken out before the fits. ",
-      r.level_shift, *r.level_shift_time_s, of_level);
+             "The recorded level steps by {:+.4g} at {:.1f} s{} (an operating-point change, or a "
+             "gain that changed with the operating point in it); the step is taken out before "
+             "the fits. ",
+             r.level_shift, *r.level_shift_time_s, of_level) +
+         step_gain_words(r.location.step_gain);
 }
 
 // A disturbance the location found that no hypothesis makes worth its parameters.
@@ -147,8 +178,18 @@ std::string unseen_input_words(const DiagnoseResult& r) {
       thresholds::kUnseenInputGainPct);
 }
 
+// The blind search's best (search.hpp blind_search) when nothing was named.
+std::string blind_words(const DiagnoseResult& r) {
+  if (r.hypotheses.empty() || r.location.disturbance || r.location.clip.side != 0) return "";
+  const HypothesisFit& best = r.hypotheses.front();
+  return fmt::format(
+      " Every input-side effect was fitted all the same: the best ({}) adds {:.1f} points of "
+      "validation score, less than the {:.1f} asked when the input tests found nothing.",
+      verdict_of(best), best.score, thresholds::kUnseenInputGainPct);
+}
+
 std::string negligible_disturbance(const DiagnoseResult& r) {
-  if (!r.location.disturbance) return "";
+  if (!r.location.disturbance) return blind_words(r);
   const auto it = std::find_if(r.hypotheses.begin(), r.hypotheses.end(),
                                [](const HypothesisFit& g) { return !has_input_side(g); });
   if (it == r.hypotheses.end()) return "";
@@ -239,10 +280,12 @@ std::string explain(const DiagnoseResult& r) {
   }
   if (!r.location.input_mismatch && r.location.clip.side == 0 && has_input_side(*h))
     s += fmt::format(
-        "The input tests found no mismatch beside the disturbance (its wander widens their "
-        "bounds), but fitted with it the effect diagnosed below adds {:.1f} points of validation "
-        "score, "
-        "more than the {:.1f} asked of an effect found this way. ",
+        "The input tests found no mismatch {}, but the effect diagnosed below, {}, adds {:.1f} "
+        "points of validation score, more than the {:.1f} asked of an effect found this way. ",
+        r.location.disturbance ? "beside the disturbance (its wander widens their bounds)"
+                               : "(the residual over the excited band, or over the whole "
+                                 "record, does not show it)",
+        r.location.disturbance ? "fitted with it" : "fitted all the same",
         h->score - disturbance_part_score(r.hypotheses, *h), thresholds::kUnseenInputGainPct);
   std::string what;
   for (const auto& e : h->effects) {

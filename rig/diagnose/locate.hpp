@@ -88,6 +88,17 @@ struct Disturbances {
   bool drift = false;
 };
 
+// The small-signal gain after a level step taken out of the recording (diagnose.cpp) against
+// before it: a measurement gain with the operating level in it (a CT ratio) scales both the
+// level and the response by the same ratio; an operating-point change moves the level alone.
+struct StepGain {
+  bool tested = false;
+  double level_ratio = 1.0;                // 1 + step / the level before it
+  double change = 0.0, sd = 0.0, z = 0.0;  // gain after minus gain before, relative to the model
+  // |z| beyond thresholds::kStepGainZ and the change within kStepGainAgreeSds of the level's.
+  bool fires = false;
+};
+
 struct Location {
   FrequencyLocation freq;
   std::vector<TimeWindow> windows;  // where the residual leaves its noise bounds
@@ -101,7 +112,8 @@ struct Location {
   // Problem::output_clip: the recording met a limit, so the plant left its linear range;
   // every effect is tried, but none needs to be found (every model is clipped there too).
   OutputClip clip;
-  bool input_mismatch = false;  // frequency, cross-correlation or amplitude test failed
+  StepGain step_gain;
+  bool input_mismatch = false;  // frequency, cross-correlation, amplitude or step-gain test failed
   bool behind_drift = false;    // ... only once the drift was taken out of the residual
   bool disturbance = false;
   // Whether effects are searched for: a failed test, a disturbance or a clipped output.
@@ -115,6 +127,9 @@ AmplitudeLocation locate_amplitude(const Problem& pr, const Eigen::VectorXd& res
 Disturbances locate_disturbances(const Problem& pr, const Eigen::VectorXd& residual,
                                  const FrequencyLocation& freq);
 Location locate(const Problem& pr, const Eigen::VectorXd& baseline_yhat);
+// The step-gain test at Problem::level_step_removed_at (untested without one).
+StepGain locate_step_gain(const Problem& pr, const Eigen::VectorXd& residual,
+                          const Eigen::VectorXd& yhat, double level_ratio);
 
 // Welch segment length for a record of n samples: a power of two, about n / 8, in [64, 4096].
 Eigen::Index welch_segment(Eigen::Index n);

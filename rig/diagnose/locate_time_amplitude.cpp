@@ -288,6 +288,36 @@ AmplitudeLocation locate_amplitude(const Problem& pr, const Eigen::VectorXd& r_a
   return a;
 }
 
+// r on [yh before the step, yh after it]: the difference of the two gains, its standard
+// deviation with the residual's correlation (Bartlett) and its z; it fires when the gain
+// moved significantly and by what the level's ratio says (a transducer's gain change).
+StepGain locate_step_gain(const Problem& pr, const Eigen::VectorXd& r_all,
+                          const Eigen::VectorXd& yh_all, double level_ratio) {
+  StepGain s;
+  const Eigen::Index n = r_all.size();
+  Eigen::Index from = 0;
+  while (from < n && pr.est_weight(from) + pr.val_weight(from) <= 0.0) ++from;
+  const Eigen::Index m = n - from, k = pr.level_step_removed_at - from;
+  if (m < 256 || k < 64 || m - k < 64) return s;
+  const Eigen::VectorXd r = detrend(pr, r_all).tail(m), yh = detrend(pr, yh_all).tail(m);
+  Eigen::MatrixXd x = Eigen::MatrixXd::Zero(m, 2);
+  x.col(0).head(k) = yh.head(k);
+  x.col(1).tail(m - k) = yh.tail(m - k);
+  const double n_eff =
+      static_cast<double>(m) / bartlett_factor(r, yh, std::min<Eigen::Index>(200, m / 4));
+  const Ls fit = least_squares(x, r);
+  const double var =
+      fit.rss / std::max(1.0, n_eff - 2) * (fit.inv(0, 0) + fit.inv(1, 1) - 2.0 * fit.inv(0, 1));
+  s.tested = true;
+  s.level_ratio = level_ratio;
+  s.change = fit.beta(1) - fit.beta(0);
+  s.sd = std::sqrt(std::max(var, 1e-300));
+  s.z = s.change / s.sd;
+  s.fires = std::abs(s.z) > thresholds::kStepGainZ &&
+            std::abs(s.change - (level_ratio - 1.0)) <= thresholds::kStepGainAgreeSds * s.sd;
+  return s;
+}
+
 bool two_level_input(const Eigen::VectorXd& u) {
   const Eigen::Index n = u.size();
   const double sd = std::sqrt((u.array() - u.mean()).square().mean());

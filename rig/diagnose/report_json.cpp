@@ -46,6 +46,19 @@ json hypothesis_json(const HypothesisFit& h, const Problem& pr) {
           {"evaluations", h.evaluations}};
 }
 
+// An operating-point step taken out of the recording and the step-gain test at it.
+json level_shift_json(const DiagnoseResult& r) {
+  if (!r.level_shift_time_s) return nullptr;
+  json j = {{"time_s", *r.level_shift_time_s}, {"size", r.level_shift}};
+  if (const StepGain& g = r.location.step_gain; g.tested)
+    j["step_gain"] = {{"level_ratio", g.level_ratio},
+                      {"gain_change", g.change},
+                      {"gain_change_sd", g.sd},
+                      {"z", g.z},
+                      {"fires", g.fires}};
+  return j;
+}
+
 json location_json(const DiagnoseResult& r) {
   const Location& loc = r.location;
   json windows = json::array();
@@ -70,9 +83,7 @@ json location_json(const DiagnoseResult& r) {
   return {{"band_hz", band},
           {"timing_nuisance_s", r.timing_nuisance_s},
           {"time_windows", windows},
-          {"level_shift", r.level_shift_time_s ? nlohmann::json{{"time_s", *r.level_shift_time_s},
-                                                                {"size", r.level_shift}}
-                                               : nlohmann::json(nullptr)},
+          {"level_shift", level_shift_json(r)},
           {"amplitude_dependent",
            loc.amp.amplitude_dependent || loc.amp.sign_dependent || loc.amp.direction_dependent},
           {"amplitude",

@@ -292,17 +292,35 @@ Problem spanned(const Problem& pr, const HypothesisFit& h) {
   return out;
 }
 
-std::vector<HypothesisFit> search_hypotheses(const Problem& pr, const Location& loc,
-                                             const Eigen::VectorXd& base,
-                                             const DiagnoseOptions& o) {
+namespace {
+
+// Every applicable single (the input-side ones also when `blind`) screened and the best
+// searched in full, onsets, the sensor-lag twin; ranked.
+std::vector<HypothesisFit> search_singles(const Problem& pr, const Location& loc,
+                                          const Eigen::VectorXd& base, const DiagnoseOptions& o,
+                                          bool blind) {
   std::vector<Candidate> cands;
-  for (Effect e : applicable(pr, loc, o))
+  for (Effect e : applicable(pr, loc, o, blind))
     for (auto& c : singles_of(e, pr, loc)) cands.push_back(std::move(c));
   std::vector<HypothesisFit> hs = screen_and_refine(pr, cands, base, o);
   refine_onsets(pr, hs, base, o.fit);
   research_at_onset(pr, cands, hs, base, o);
   add_sensor_lag_twin(pr, hs, o.fit);
   rank(hs);
+  return hs;
+}
+
+}  // namespace
+
+std::vector<HypothesisFit> blind_search(const Problem& pr, const Location& loc,
+                                        const Eigen::VectorXd& base, const DiagnoseOptions& o) {
+  return search_singles(pr, loc, base, o, true);
+}
+
+std::vector<HypothesisFit> search_hypotheses(const Problem& pr, const Location& loc,
+                                             const Eigen::VectorXd& base,
+                                             const DiagnoseOptions& o) {
+  std::vector<HypothesisFit> hs = search_singles(pr, loc, base, o, false);
   // Added last: the pair searches below take the singles' disturbances one at a time.
   std::vector<HypothesisFit> lines = both_disturbances(pr, hs, base, o);
   const auto done = [&](std::vector<HypothesisFit> more) {

@@ -153,6 +153,11 @@ inline constexpr int kOnsetHypotheses = 3;
 inline constexpr double kLevelShiftSpreads = 10.0;
 // ... and this fraction of the model output's std: large against the input-driven response.
 inline constexpr double kLevelShiftOfOutputStd = 0.5;
+// The step-gain test (locate.hpp StepGain): the gain after a level step differs from before
+// it by more than this many standard deviations (the sign and direction tests' bound) ...
+inline constexpr double kStepGainZ = 5.0;
+// ... and by what the level's step implies, within this many (a 99.7 % interval).
+inline constexpr double kStepGainAgreeSds = 3.0;
 
 // --- Where an input-side nonlinearity sits (placement.cpp) ---
 // The in-loop place's front lag T_f (the path from the bias to the nonlinearity: a

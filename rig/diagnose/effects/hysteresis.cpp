@@ -24,6 +24,17 @@ constexpr double kShapeRatioHi = 1.0;
 // The shares a and b: at most 1.2 (a fifth more than the model's own gain).
 constexpr double kShareMax = 1.2;
 
+// A fit whose shape ratio stops within this share of the range from its rounded end asked
+// for a still more gradual engagement, which is no loop but a lag: not credible (the
+// resonance's damping bound and the front lag's bound are treated alike). On gensim a
+// combustion lag read as a loop with shape -0.90 and a half width of 1.6 input standard
+// deviations; every true loop there has a shape ratio of -0.45 or more.
+constexpr double kRoundedEndShare = 0.02;
+
+bool credible(const AppliedEffect& e, const DataScales&) {
+  return e.params[1] > kShapeRatioLo + kRoundedEndShare * (kShapeRatioHi - kShapeRatioLo);
+}
+
 std::vector<ParamSpec> specs(const DataScales& s) {
   const double su = std::max(s.u_std, 1e-12);
   return {{"half_width", 1e-4 * su, 3.0 * su, true},
@@ -84,6 +95,7 @@ const EffectModel kHysteresisEffect{
     .generalises = Effect::kBacklash,  // shape_ratio 1: a play
     .in_feedback = true,               // a hysteretic spring (the Bouc-Wen oscillator)
     .needs_direction_evidence = true,
+    .credible = credible,
 };
 
 }  // namespace rig::diagnose

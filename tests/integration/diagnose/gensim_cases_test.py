@@ -17,6 +17,11 @@ these are the cases that pin a fixed behaviour:
   * a rack stop behind the grid's wander (benchmark seed 1, g074), which the input tests
     miss behind it: found by pairing the input-side effects with the dominant drift, after
     the governor's PI with its integrator held at the stop;
+  * an undeclared AC coupling of the transducer behind a drift (benchmark seed 4, g070) and
+    a shaft mode that moved half-way (seed 4, g054), which no input test sees: found by the
+    blind search of every input-side effect, named by what it adds;
+  * a combustion lag (seed 4, g005) whose best Bouc-Wen stand-in stops at its most rounded
+    shape: a lag, not a loop;
   * a fuel dead time (benchmark seed 1, g000): a linear effect, as a guard;
   * a null case with the set's operating nuisances (benchmark seed 1, g082): `none`.
 """
@@ -92,6 +97,21 @@ class GensimCases(unittest.TestCase):
         self.assertEqual([e["effect"] for e in h["effects"]], ["saturation", "drift"])
         self.assertIn("found no mismatch beside the disturbance", rep["explanation"])
         self.assertGreater(h["validation_fit_after"], h["validation_fit_before"])
+
+    def test_effects_no_input_test_sees_are_found_by_the_blind_search(self):
+        for args, verdict in ((("ac_coupling", "large", "drift", 996512), "ac_coupling"),
+                              (("resonance", "large", "partial", 364132), "resonance")):
+            _, rep, seed = self.run_case(*args)
+            self.assertFalse(rep["location"]["input_mismatch"], rep["explanation"])
+            self.assertEqual(rep["verdict"], verdict, f"seed {seed}: {rep['explanation']}")
+            self.assertIn("fitted all the same", rep["explanation"])
+            h = rep["hypotheses"][rep["chosen"]]
+            self.assertGreaterEqual(h["score"], 3.0, rep["explanation"])
+
+    def test_a_combustion_lag_is_a_lag_not_a_rounded_loop(self):
+        _, rep, seed = self.run_case("extra_lag", "large", "plain", 976243)
+        self.assertIn(rep["verdict"], ("extra_lag", "sensor_lag"),
+                      f"seed {seed}: {rep['explanation']}")
 
     def test_a_longer_fuel_dead_time_is_a_dead_time(self):
         truths, rep, seed = self.run_case("dead_time", "large", "plain", 473189)

@@ -115,6 +115,38 @@ TEST(Locate, AGainChangeWithTheLevelInItIsFittedFromTheLevelStep) {
   EXPECT_NEAR(static_cast<double>(h.active_from), static_cast<double>(half), 1.0 / in.dt_s);
 }
 
+// The step-gain test tells the two readings of a level step apart: a transducer gain that
+// drops to 0.8 scales the response with the level (it fires, and agrees with the level's
+// ratio); an operating-point step of the same size leaves the response as it was.
+TEST(Locate, TheResponseTellsAGainChangeFromAnOperatingPointStep) {
+  for (const bool gain_change : {true, false}) {
+    DiagnoseInput in = test::null_record(72);
+    const Eigen::VectorXd z = model::simulate(in.model, in.u, in.dt_s);
+    const double level = 100.0 * test::rms(z), ratio = 0.8;
+    const Eigen::Index n = z.size(), half = n / 2;
+    in.y = z.array() + level;
+    if (gain_change)
+      in.y.tail(n - half) *= ratio;
+    else
+      in.y.tail(n - half).array() -= (1.0 - ratio) * level;
+    in.y += test::white(n, 0.3 * test::rms(z), 24);
+    // The level before the step (the input's operating point gives z a mean of its own).
+    const double before = in.y.head(half).mean();
+    const DiagnoseResult r = diagnose(in);
+    ASSERT_TRUE(r.level_shift_time_s.has_value()) << r.explanation;
+    const StepGain& g = r.location.step_gain;
+    ASSERT_TRUE(g.tested) << r.explanation;
+    EXPECT_NEAR(g.level_ratio, gain_change ? ratio : 1.0 - (1.0 - ratio) * level / before, 0.01)
+        << r.explanation;
+    EXPECT_NEAR(g.change, gain_change ? ratio - 1.0 : 0.0, 3.0 * g.sd) << r.explanation;
+    EXPECT_LT(g.sd, 0.03) << "too noisy to tell the two apart";
+    EXPECT_EQ(g.fires, gain_change) << r.explanation;
+    EXPECT_EQ(r.verdict, gain_change ? "gain_change" : "none") << r.explanation;
+    const char* words = gain_change ? "not the operating point" : "the operating point changed";
+    EXPECT_NE(r.explanation.find(words), std::string::npos) << r.explanation;
+  }
+}
+
 // The value of y below which a fraction q of its samples lie.
 double quantile(const Eigen::VectorXd& y, double q) {
   std::vector<double> v(y.data(), y.data() + y.size());
