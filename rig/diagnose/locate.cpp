@@ -16,6 +16,7 @@
 #include <numbers>
 
 #include "rig/diagnose/blocks.hpp"
+#include "rig/diagnose/thresholds.hpp"
 
 namespace rig::diagnose {
 namespace {
@@ -43,7 +44,7 @@ void find_line(const Problem& pr, const Eigen::VectorXd& r, const FrequencyLocat
     if (ratio > d.line_ratio)
       d.line_ratio = ratio, d.line_freq_hz = b[static_cast<std::size_t>(k)].freq_hz;
   }
-  d.periodic = d.line_ratio > 12.0;
+  d.periodic = d.line_ratio > thresholds::kLineToNeighbours;
   if (!d.periodic || nb < 2) return;
   const double df = b[1].freq_hz - b[0].freq_hz;
   double best = -1.0, f0 = d.line_freq_hz;
@@ -62,6 +63,11 @@ double corr(const Eigen::VectorXd& a, const Eigen::VectorXd& b) {
 
 }  // namespace
 
+double drift_smooth_s(const Problem& pr) {
+  return std::max(thresholds::kDriftSmoothMinSamples * pr.dt_s,
+                  pr.scales.duration_s / thresholds::kDriftSmoothRecordDivisor);
+}
+
 Disturbances locate_disturbances(const Problem& pr, const Eigen::VectorXd& r,
                                  const FrequencyLocation& fl) {
   Disturbances d;
@@ -69,15 +75,16 @@ Disturbances locate_disturbances(const Problem& pr, const Eigen::VectorXd& r,
   Eigen::Index from = 0;
   while (from < r.size() && pr.est_weight(from) + pr.val_weight(from) <= 0.0) ++from;
   const Eigen::VectorXd rs = r.tail(r.size() - from);
-  d.drift_tau_s = std::max(50.0 * pr.dt_s, pr.scales.duration_s / 40.0);
+  d.drift_tau_s = drift_smooth_s(pr);
   const Eigen::VectorXd s = smooth_zero_phase(rs, d.drift_tau_s, pr.dt_s);
   const double vr = (rs.array() - rs.mean()).square().mean();
   const double vs = (s.array() - s.mean()).square().mean();
   d.drift_ratio = vr > 0.0 ? vs / vr : 0.0;
   const Eigen::VectorXd zs =
       smooth_zero_phase(pr.baseline_z.tail(r.size() - from), d.drift_tau_s, pr.dt_s);
-  d.drift = d.drift_ratio > 0.1 && d.drift_ratio > 30.0 * pr.dt_s / d.drift_tau_s &&
-            std::abs(corr(s, zs)) < 0.7;
+  d.drift = d.drift_ratio > thresholds::kDriftShare &&
+            d.drift_ratio > thresholds::kDriftOverWhite * pr.dt_s / d.drift_tau_s &&
+            std::abs(corr(s, zs)) < thresholds::kDriftNotModelCorr;
   return d;
 }
 

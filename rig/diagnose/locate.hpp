@@ -124,6 +124,10 @@ FrequencyLocation locate_frequency(const Problem& pr, const Eigen::VectorXd& res
 std::vector<TimeWindow> locate_time(const Problem& pr, const Eigen::VectorXd& residual);
 AmplitudeLocation locate_amplitude(const Problem& pr, const Eigen::VectorXd& residual,
                                    const Eigen::VectorXd& yhat);
+// The drift test's smoothing time scale (thresholds.hpp kDriftSmoothMinSamples,
+// kDriftSmoothRecordDivisor); the amplitude tests detrend their regressors with it too.
+double drift_smooth_s(const Problem& pr);
+
 Disturbances locate_disturbances(const Problem& pr, const Eigen::VectorXd& residual,
                                  const FrequencyLocation& freq);
 Location locate(const Problem& pr, const Eigen::VectorXd& baseline_yhat);

@@ -72,7 +72,8 @@ void keep_unless_signal_proportional(const Eigen::VectorXd& z, Eigen::Index w,
   const double b = std::max(0.0, (k * sxy - sx * sy) / det);
   const double a = std::max(0.0, (sy - b * sx) / k);
   for (std::size_t i = 0; i < m; ++i)
-    if (loud[i] && er[i] <= 2.25 * (a + b * ez[i])) loud[i] = false;
+    if (loud[i] && er[i] <= thresholds::kWindowOverSignalPrediction * (a + b * ez[i]))
+      loud[i] = false;
 }
 
 std::vector<TimeWindow> locate_time(const Problem& pr, const Eigen::VectorXd& r_all) {
@@ -104,7 +105,8 @@ std::vector<TimeWindow> locate_time(const Problem& pr, const Eigen::VectorXd& r_
   std::vector<bool> loud(lms.size());
   for (std::size_t i = 0; i < lms.size(); ++i) {
     const double excess = lms[i] - ref;
-    loud[i] = excess > 4.5 * s && excess > 2.0 * std::log(1.15);
+    loud[i] = excess > thresholds::kWindowExcessSds * s &&
+              excess > 2.0 * std::log(thresholds::kWindowMinRmsRatio);
   }
   keep_unless_signal_proportional(pr.baseline_z.tail(n - start), w, lms, loud);
   for (std::size_t i = 0; i < lms.size(); ++i) {
@@ -145,8 +147,7 @@ Ls least_squares(const Eigen::MatrixXd& x, const Eigen::VectorXd& r) {
 // Slow content (below the drift test's time scale) removed: a drift must not project onto
 // regressors that carry a mean, such as G(u 1{u >= 0}).
 Eigen::VectorXd detrend(const Problem& pr, const Eigen::VectorXd& x) {
-  const double tau = std::max(50.0 * pr.dt_s, pr.scales.duration_s / 40.0);
-  return x - smooth_zero_phase(x, tau, pr.dt_s);
+  return x - smooth_zero_phase(x, drift_smooth_s(pr), pr.dt_s);
 }
 
 // The baseline's response to u restricted by a mask (u outside the mask set to zero).
@@ -282,9 +283,10 @@ AmplitudeLocation locate_amplitude(const Problem& pr, const Eigen::VectorXd& r_a
   a.output_level_dependent = a.output_level_chi2 > kLevelChi2Bound;
   const double spread = a.by_level.back().gain - a.by_level.front().gain;
   a.two_level_input = two_level_input(pr.u);
-  a.amplitude_dependent = a.level_chi2 > kLevelChi2Bound && std::abs(spread) > 0.02;
-  a.sign_dependent = std::abs(a.sign_z) > 5.0;
-  a.direction_dependent = std::abs(a.direction_z) > 5.0;
+  a.amplitude_dependent =
+      a.level_chi2 > kLevelChi2Bound && std::abs(spread) > thresholds::kAmplitudeMinSpread;
+  a.sign_dependent = std::abs(a.sign_z) > thresholds::kSignDirectionZ;
+  a.direction_dependent = std::abs(a.direction_z) > thresholds::kSignDirectionZ;
   return a;
 }
 

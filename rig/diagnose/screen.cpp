@@ -12,6 +12,7 @@
 namespace rig::diagnose {
 namespace {
 
+using thresholds::kPolishEvaluations;
 using thresholds::kScreenEvaluations;
 using thresholds::kScreenMaxDecimation;
 using thresholds::kScreenMinSamples;
@@ -60,18 +61,42 @@ void rank(std::vector<HypothesisFit>& hs) {
   });
 }
 
-std::vector<HypothesisFit> fit_all(const Problem& pr, const std::vector<Candidate>& cands,
-                                   const Eigen::VectorXd& base, const DiagnoseOptions& o) {
+namespace {
+
+// Every candidate fitted on the problem as it is, on the worker threads.
+std::vector<HypothesisFit> fit_each(const Problem& pr, const std::vector<Candidate>& cands,
+                                    const Eigen::VectorXd& base, const FitOptions& fit,
+                                    int threads) {
   std::vector<HypothesisFit> out(cands.size());
   std::atomic<std::size_t> next{0};
   auto work = [&] {
     for (std::size_t i = next++; i < cands.size(); i = next++)
-      out[i] = fit_hypothesis(pr, cands[i], base, o.fit);
+      out[i] = fit_hypothesis(pr, cands[i], base, fit);
   };
   std::vector<std::thread> pool;
-  for (int t = 1; t < std::max(1, o.threads); ++t) pool.emplace_back(work);
+  for (int t = 1; t < std::max(1, threads); ++t) pool.emplace_back(work);
   work();
   for (auto& t : pool) t.join();
+  return out;
+}
+
+}  // namespace
+
+std::vector<HypothesisFit> fit_all(const Problem& pr, const std::vector<Candidate>& cands,
+                                   const Eigen::VectorXd& base, const DiagnoseOptions& o) {
+  const int f = screen_decimation(pr);
+  if (f <= 1) return fit_each(pr, cands, base, o.fit, o.threads);
+  // A long record: each candidate searched in full on the decimated record (the screen's),
+  // then polished on the whole one from there (thresholds.hpp kPolishEvaluations).
+  const Problem coarse = decimated(pr, f);
+  const std::vector<HypothesisFit> rough =
+      fit_each(coarse, cands, model_output(coarse, {}).yhat, o.fit, o.threads);
+  std::vector<Candidate> from_rough;
+  for (const auto& h : rough) from_rough.push_back({h.effects});
+  FitOptions polish = o.fit;
+  polish.max_evaluations = std::min(o.fit.max_evaluations, kPolishEvaluations);
+  std::vector<HypothesisFit> out = fit_each(pr, from_rough, base, polish, o.threads);
+  for (std::size_t i = 0; i < out.size(); ++i) out[i].evaluations += rough[i].evaluations;
   return out;
 }
 

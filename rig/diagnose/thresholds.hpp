@@ -41,6 +41,40 @@ inline constexpr double kNestedMarginPct = 1.0;
 // |z| 2.8-8.7 (2.8 the one present in half the record), every deadband case 0.2-1.5.
 inline constexpr double kDirectionEvidenceZ = 3.0;
 
+// --- Location (locate.cpp, locate_time_amplitude.cpp; docs/diagnose.md Method step 2) ---
+// A residual spectral line: its PSD bin exceeds this many times the median of its
+// neighbours' (8 bins each side, the adjacent ones left out). The median of a chi^2(2 M)
+// periodogram's neighbours is steady; a factor 12 above it is beyond the Welch estimate's
+// own spread for the segment counts used (a false line on none of the gensim and plantsim
+// nulls).
+inline constexpr double kLineToNeighbours = 12.0;
+// The drift test's smoother: a time scale of at least this many samples and of the record
+// over this (slower than the excited band, a few dozen per record).
+inline constexpr double kDriftSmoothMinSamples = 50.0;
+inline constexpr double kDriftSmoothRecordDivisor = 40.0;
+// A drift: the smoothed residual carries more than this share of the residual's variance
+// (white noise through the smoother keeps about dt / tau of it) ...
+inline constexpr double kDriftShare = 0.10;
+// ... and more than this many times that white-noise share ...
+inline constexpr double kDriftOverWhite = 30.0;
+// ... and it is not the smoothed model output (|correlation| below this): a slow wander the
+// input drives is an input effect seen slowly (a limit inside the loop), not a drift.
+inline constexpr double kDriftNotModelCorr = 0.7;
+// The time windows: a window's ln(mean r^2) over the quiet level by this many of its
+// standard deviations (a Gaussian tail of 3e-6 per window, 40 windows) ...
+inline constexpr double kWindowExcessSds = 4.5;
+// ... and its rms by this factor at least (a 15 % louder window is no effect worth locating) ...
+inline constexpr double kWindowMinRmsRatio = 1.15;
+// ... and its mean square more than this factor above what the quiet windows predict from
+// its model output (a residual loud where the signal is loud is a gain, not a span).
+inline constexpr double kWindowOverSignalPrediction = 2.25;
+// The amplitude test: the gains of the lowest and highest input levels differ by more than
+// this (2 %, below a transducer's accuracy class) as well as significantly.
+inline constexpr double kAmplitudeMinSpread = 0.02;
+// The sign and direction tests: |z| beyond this (the regression's standard error inflated by
+// the residual's correlation; 5: a false alarm in over a million records per test).
+inline constexpr double kSignDirectionZ = 5.0;
+
 // --- Speed: screening the singles (screen.cpp) ---
 // Every single hypothesis (each effect at each place: about 35) is first searched with at
 // most this many simulations per starting point ...
@@ -55,6 +89,12 @@ inline constexpr std::size_t kRefinedSingles = 8;
 inline constexpr Eigen::Index kScreenMinSamples = 20000;
 inline constexpr double kScreenOversampling = 10.0;
 inline constexpr int kScreenMaxDecimation = 4;
+// On such a record every full search (the refined singles, the pairs) also runs on the
+// decimated samples, and is then polished on the whole record from where it stopped with at
+// most this many simulations: a few Levenberg-Marquardt steps of a 2-7 parameter hypothesis,
+// enough to take up the decimation's few per cent (a 10-minute 100 Hz record: the search's
+// simulations cost a third, docs/diagnose.md "Speed").
+inline constexpr int kPolishEvaluations = 40;
 
 // --- A two-level input (locate.hpp two_level_input) ---
 // A PRBS sits on two values; rounding to 1 % of the input's standard deviation keeps a
