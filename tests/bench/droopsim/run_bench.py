@@ -3,7 +3,7 @@
 droop-governed set, written apart from gensim and plantsim), each judged detectable or not
 by the oracle, diagnosed by the rig, scored with gensim's scoring rules.
 
-    /usr/bin/python3 tests/bench/droopsim/run_bench.py --rig /tmp/rig-frozen/rig --seed 1 \
+    /usr/bin/python3 tests/bench/droopsim/run_bench.py --rig build/bin/rig --seed 1 \
         --out /tmp/droopsim-s1 [--quick] [--only EFFECT] [--reuse] [--rescore RESULTS.json]
 
 Right (gensim's is_right): the verdict names the true effect; extra_lag and sensor_lag count
