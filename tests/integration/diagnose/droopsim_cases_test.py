@@ -1,0 +1,87 @@
+#!/usr/bin/python3
+"""`rig diagnose` on a few concealed cases from droopsim (tests/bench/droopsim), the droop
+governed set written apart from plantsim and gensim and never tuned on (docs/droopsim.md):
+50 Hz rows, a moving-average transducer, a governor that sees the set only through its speed.
+Each case is simulated from its seed (benchmark seed 1), diagnosed by the rig binary and
+judged against droopsim's own truth.
+
+    RIG_BIN_DIR=build/bin /usr/bin/python3 tests/integration/diagnose/droopsim_cases_test.py
+
+  * a slower power transducer, plain (d010) and behind the declared 8 s coupling (d013):
+    `sensor_lag` (or its twin), its time constant within 20 %, the fit improved;
+  * a null (d080): `none`;
+  * a combustion lag inside the speed loop (d005): named `resonance` today (a moved mode;
+    docs/droopsim.md), marked as the known failure it is, so that the day the loop's own
+    place names it `extra_lag` this test reports the unexpected success.
+"""
+import json
+import os
+import subprocess
+import sys
+import tempfile
+import unittest
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+sys.path.insert(0, os.path.join(HERE, "..", "..", "bench", "droopsim"))
+import cases as cs  # noqa: E402
+import plant as pl  # noqa: E402
+
+PARAM_TOL = 0.20  # the issue's "parameter within 20 %"
+LAGS = ("extra_lag", "sensor_lag")  # told apart by the noise's roll-off, counted as one
+
+
+def rig() -> str:
+    return os.path.join(os.environ.get("RIG_BIN_DIR", "build/bin"), "rig")
+
+
+def diagnose_case(effect, concealment, seed, work):
+    """Simulates the case into work/case, runs rig diagnose, returns (truths, report)."""
+    case = cs.make_case("test", effect, concealment, seed)
+    sim = pl.simulate(case["u"], case["p"], seed=case["seed"], onset_s=case["onset_s"],
+                      p_after=case["p_after"])
+    d = os.path.join(work, "case")
+    cs.write_case(case, sim["y"][:, 0], d)
+    out = os.path.join(work, "diag")
+    proc = subprocess.run([rig(), "diagnose", "--recording", os.path.join(d, "recording.csv"),
+                           "--model", os.path.join(d, "model.json"), "--out", out],
+                          capture_output=True, text=True)
+    if proc.returncode != 0:
+        raise AssertionError(f"rig diagnose exit {proc.returncode}: {proc.stderr.strip()}")
+    with open(os.path.join(out, "report.json")) as f:
+        return case["truths"], json.load(f)
+
+
+class DroopsimCases(unittest.TestCase):
+    def run_case(self, *args):
+        with tempfile.TemporaryDirectory() as work:
+            truths, rep = diagnose_case(*args, work)
+        print(f"{args[0]} {args[1]} seed {args[2]}: verdict {rep['verdict']}", flush=True)
+        return truths, rep
+
+    def check_lag(self, truths, rep):
+        self.assertIn(rep["verdict"], LAGS, rep["explanation"])
+        h = rep["hypotheses"][rep["chosen"]]
+        lag = next(e for e in h["effects"] if e["effect"] in LAGS)
+        truth = truths[0]["truth"]
+        got = lag["params"]["time_constant_s"]
+        print(f"  time constant {got:.4f} s against {truth:.4f} s", flush=True)
+        self.assertLess(abs(got - truth), PARAM_TOL * truth, rep["explanation"])
+        self.assertGreater(h["validation_fit_after"], h["validation_fit_before"])
+
+    def test_a_slower_transducer_is_a_sensor_lag(self):
+        self.check_lag(*self.run_case("sensor_lag", "plain", 437742))
+
+    def test_a_slower_transducer_behind_the_declared_coupling_is_a_sensor_lag(self):
+        self.check_lag(*self.run_case("sensor_lag", "coupled8", 630101))
+
+    def test_a_null_is_none(self):
+        _, rep = self.run_case("none", "plain", 112451)
+        self.assertEqual(rep["verdict"], "none", rep["explanation"])
+
+    @unittest.expectedFailure
+    def test_a_combustion_lag_inside_the_speed_loop_is_a_lag(self):
+        self.check_lag(*self.run_case("extra_lag", "plain", 187690))
+
+
+if __name__ == "__main__":
+    unittest.main(verbosity=2)
