@@ -1,6 +1,7 @@
 #include "rig/diagnose/augmented_model.hpp"
 
 #include <Eigen/Dense>
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <numbers>
@@ -9,6 +10,7 @@
 #include "rig/diagnose/blocks.hpp"
 #include "rig/diagnose/effect_registry.hpp"
 #include "rig/diagnose/error_loop.hpp"
+#include "rig/diagnose/governor_loop.hpp"
 #include "rig/diagnose/placement.hpp"
 #include "rig/diagnose/thresholds.hpp"
 #include "rig/signal/ac_coupling.hpp"
@@ -18,11 +20,21 @@ namespace {
 
 constexpr double kTwoPi = 2.0 * std::numbers::pi;
 
-// A linear effect changes the transfer function, but on the governor's error (a dead time
-// inside the loop), where the error loop applies it instead.
+// A linear effect changes the transfer function: in series, or inside the governor's loop
+// (governor_loop.hpp); but on the governor's error (a dead time inside the loop), where the
+// error loop applies it instead.
 void apply_linear(model::TransferFunction& tf, const AppliedEffect& e) {
   if (e.place == Place::kError) return;
-  if (const auto apply = effect_model(e.effect).apply_linear) apply(tf, e.params);
+  const EffectModel& m = effect_model(e.effect);
+  if (e.place == Place::kGovernorLoop) {
+    if (!m.loop_factor)
+      throw std::invalid_argument(std::string("no form in the loop for ") + m.name);
+    Eigen::VectorXd nf, df;
+    m.loop_factor(e.params, nf, df);
+    tf = close_governor_loop(tf, nf, df, e.place_params);
+    return;
+  }
+  if (const auto apply = m.apply_linear) apply(tf, e.params);
 }
 
 Eigen::VectorXd apply_input(const Problem& pr, const AppliedEffect& e, Eigen::VectorXd v) {
@@ -210,6 +222,14 @@ std::function<double(std::span<const double>)> error_effect(const Problem& pr,
           dt_s = pr.dt_s](std::span<const double> e) { return on_error(p, e, sigma, dt_s); };
 }
 
+// A governor loop closed with a fitted feedback that makes it unstable (the recording's
+// plant is not: the point is outside the hypothesis).
+bool unstable_loop(std::span<const AppliedEffect> effects, const model::TransferFunction& tf) {
+  return std::any_of(effects.begin(), effects.end(),
+                     [](const AppliedEffect& e) { return e.place == Place::kGovernorLoop; }) &&
+         !tf.is_stable();
+}
+
 }  // namespace
 
 ModelOutput model_output(const Problem& pr, std::span<const AppliedEffect> effects) {
@@ -252,6 +272,8 @@ ModelOutput model_output(const Problem& pr, std::span<const AppliedEffect> effec
   Eigen::VectorXd z;
   if (!input_side) {
     z = pr.baseline_z;
+  } else if (unstable_loop(effects, out.tf)) {  // explains nothing: the fit rejects the point
+    z = Eigen::VectorXd::Constant(pr.u.size(), std::numeric_limits<double>::quiet_NaN());
   } else {
     z = linear_output(pr, effects, out.tf, loop, v, feedback);
     if (fb) z = close_feedback(pr, effects, out.tf, loop, *fb, v, feedback, std::move(z));

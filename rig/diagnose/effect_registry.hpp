@@ -90,6 +90,11 @@ struct EffectModel {
   // when it has one: then it is also tried after the governor's PI, inside its loop
   // (Place::kPiLoop). sigma: the standard deviation of its input, dt_s its sample period.
   double (*step)(const Params& p, StepState& s, double x, double sigma, double dt_s) = nullptr;
+  // Its linear part as a rational factor F = num / den with F(0) = 1, when it can sit inside
+  // the governor's loop: then it is also tried there (Place::kGovernorLoop,
+  // rig/diagnose/governor_loop.hpp): a lag or a transport delay of the actuator or the
+  // engine, which the loop works around, unlike one in the transducer.
+  void (*loop_factor)(const Params& p, Eigen::VectorXd& num, Eigen::VectorXd& den) = nullptr;
   // Its terms of the output feedback (kFeedback).
   void (*feedback)(const Problem& problem, const Params& p, FeedbackTerms& terms) = nullptr;
   // A disturbance's part of the output's least-squares fit (augmented_model.cpp): columns

@@ -92,14 +92,14 @@ struct DataScales {
 std::vector<ParamSpec> parameter_specs(Effect effect, const DataScales& scales);
 
 // Where an input-side nonlinearity acts (placement.hpp); other effects are at kInput.
-enum class Place { kInput, kInLoop, kOutput, kFeedback, kError, kPiLoop };
+enum class Place { kInput, kInLoop, kOutput, kFeedback, kError, kPiLoop, kGovernorLoop };
 const char* to_string(Place place);
 // How reports name a place: " (in the loop)" after the effect's word ("" at the input), and
 // what the augmented model's "acts" field says of it.
 const char* place_suffix(Place place);
 const char* place_acts(Place place);
 // The parameters a place adds to its effect's (in the loop: front_lag_s; after the
-// governor's PI: integral_time_s).
+// governor's PI: integral_time_s; in the governor's loop: its feedback's shares and filter).
 std::vector<ParamSpec> place_specs(Place place, const DataScales& scales);
 
 struct AppliedEffect {

@@ -94,6 +94,11 @@ std::string what_effect_means(const AppliedEffect& e, const HypothesisFit& h, co
         "{:.0f} ms), inside the loop that works against it (the actuator or the rack; the "
         "values are the bias-% equivalents there)",
         e.place_params.at(0), 1e3 * e.place_params.at(1));
+  if (e.place == Place::kGovernorLoop)
+    s += fmt::format(
+        "; the governor sees, fitted, {:.2f} of the output and {:.2f} of its rate over "
+        "{:.0f} ms",
+        e.place_params.at(0), e.place_params.at(1), 1e3 * e.place_params.at(2));
   if (e.place == Place::kOutput)
     s += fmt::format(
         ", not on the bias but on the measured output (the values are bias-% equivalents; "

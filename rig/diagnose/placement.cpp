@@ -33,6 +33,10 @@ constexpr PlaceWords kPlaceWords[] = {
      "after the PI and output filter of a unity-feedback loop whose closed loop is the tf: "
      "e = u - y / G0, a = k C e, C = (1 + 1 / (s integral_time_s)) / (1 + s filter_lag_s), "
      "y = tf (u - C^-1 (a - N(a)) / k), k from the linear loop's a in the bias's rms"},
+    {Place::kGovernorLoop, "governor_loop", " (inside the governor's loop)",
+     "inside a loop whose closed loop is the tf (its dead time outside), forward part "
+     "P = G' / (1 - G' h), G' = tf / G0, feedback h = (loop_static_share + loop_rate_share s "
+     "loop_filter_s) / (1 + s loop_filter_s): tf F / (1 - G' h (1 - F))"},
 };
 
 const PlaceWords& words(Place place) {
@@ -53,6 +57,10 @@ std::vector<ParamSpec> place_specs(Place place, const DataScales& s) {
   if (place == Place::kPiLoop)
     return {{"integral_time_s", thresholds::kPiIntegralMinS, thresholds::kPiIntegralMaxS, true},
             {"filter_lag_s", thresholds::kPiFilterMinS, thresholds::kPiFilterMaxS, true}};
+  if (place == Place::kGovernorLoop)
+    return {{"loop_static_share", thresholds::kLoopStaticMin, thresholds::kLoopStaticMax, false},
+            {"loop_rate_share", -thresholds::kLoopRateMax, thresholds::kLoopRateMax, false},
+            {"loop_filter_s", thresholds::kLoopFilterMinS, thresholds::kLoopFilterMaxS, true}};
   if (place != Place::kInLoop) return {};
   return {{"front_lag_s", std::max(s.dt_s, thresholds::kFrontLagMinS), thresholds::kFrontLagMaxS,
            true}};
@@ -134,6 +142,12 @@ std::vector<std::vector<AppliedEffect>> placed_starts(Effect effect, Place place
     }
     return out;
   }
+  if (place == Place::kGovernorLoop) {  // a linear effect: its seeds at the input's scales
+    for (auto& p : seeds_for(effect, pr, loc))
+      for (const auto& h : thresholds::kLoopSeeds)
+        out.push_back({AppliedEffect{effect, p, place, {h[0], h[1], h[2]}}});
+    return out;
+  }
   if (place != Place::kInLoop) {
     const Problem at = problem_at(pr, place, {});
     for (auto& p : seeds_for(effect, at, loc)) out.push_back({AppliedEffect{effect, p, place, {}}});
@@ -155,6 +169,13 @@ bool place_credible(const AppliedEffect& e) {
     return e.place_params[0] < thresholds::kFrontLagAtBound * thresholds::kPiIntegralMaxS &&
            e.place_params[0] * thresholds::kFrontLagAtBound > thresholds::kPiIntegralMinS &&
            e.place_params.at(1) < thresholds::kFrontLagAtBound * thresholds::kPiFilterMaxS;
+  if (e.place == Place::kGovernorLoop) {
+    const auto& p = e.place_params;
+    const double at = thresholds::kLoopAtBound;
+    return p[0] < at * thresholds::kLoopStaticMax && p[0] > at * thresholds::kLoopStaticMin &&
+           std::abs(p[1]) < at * thresholds::kLoopRateMax &&
+           p[2] < at * thresholds::kLoopFilterMaxS && p[2] * at > thresholds::kLoopFilterMinS;
+  }
   return true;
 }
 

@@ -5,6 +5,7 @@
 #include <optional>
 
 #include "rig/diagnose/effect_registry.hpp"
+#include "rig/diagnose/governor_loop.hpp"
 #include "rig/diagnose/placement.hpp"
 #include "rig/diagnose/screen.hpp"
 #include "rig/diagnose/split.hpp"
@@ -22,7 +23,8 @@ using thresholds::kRefinedForwardPairs;
 
 // Places that hold one effect only (one front lag, one feedback path, one error loop).
 bool one_per_record(Place p) {
-  return p == Place::kInLoop || p == Place::kFeedback || p == Place::kError || p == Place::kPiLoop;
+  return p == Place::kInLoop || p == Place::kFeedback || p == Place::kError ||
+         p == Place::kPiLoop || p == Place::kGovernorLoop;
 }
 
 // Whether a and b can share a model: one effect per loop place, and the error loop (whose
@@ -33,8 +35,8 @@ bool pairable(const AppliedEffect& a, const AppliedEffect& b) {
     return e.place == Place::kInLoop || e.place == Place::kFeedback ||
            kind_of(e.effect) == EffectKind::kFeedback;
   };
-  const auto error_loop = [](const AppliedEffect& e) {
-    return e.place == Place::kError || e.place == Place::kPiLoop;
+  const auto error_loop = [](const AppliedEffect& e) {  // (the governor loop's changes G)
+    return e.place == Place::kError || e.place == Place::kPiLoop || e.place == Place::kGovernorLoop;
   };
   if (error_loop(a) && error_loop(b)) return false;
   return !((error_loop(a) && loop(b)) || (error_loop(b) && loop(a)));
@@ -42,16 +44,23 @@ bool pairable(const AppliedEffect& a, const AppliedEffect& b) {
 
 // Whether an effect is tried at more than one place (singles below).
 bool several_places(Effect e) {
+  const EffectModel& m = effect_model(e);
   return kind_of(e) == EffectKind::kInputNonlinearity ||
-         (kind_of(e) == EffectKind::kLinear && effect_model(e).apply_on_error);
+         (kind_of(e) == EffectKind::kLinear && (m.apply_on_error || m.loop_factor));
 }
 
 // One effect's hypotheses: an input-side nonlinearity at each place it can sit
-// (placement.hpp), a linear effect with a form on the error at the input and there, any
-// other effect once.
+// (placement.hpp), a linear effect with a form on the error or in the governor's loop at the
+// input and there, any other effect once.
 std::vector<Candidate> singles_of(Effect e, const Problem& pr, const Location& loc) {
-  if (kind_of(e) == EffectKind::kLinear && effect_model(e).apply_on_error)
-    return {placed_starts(e, Place::kInput, pr, loc), placed_starts(e, Place::kError, pr, loc)};
+  if (kind_of(e) == EffectKind::kLinear) {
+    const EffectModel& m = effect_model(e);
+    std::vector<Candidate> out{placed_starts(e, Place::kInput, pr, loc)};
+    if (m.apply_on_error) out.push_back(placed_starts(e, Place::kError, pr, loc));
+    if (m.loop_factor && governor_loop_possible(pr.tf))
+      out.push_back(placed_starts(e, Place::kGovernorLoop, pr, loc));
+    return out;
+  }
   if (kind_of(e) != EffectKind::kInputNonlinearity)
     return {placed_starts(e, Place::kInput, pr, loc)};
   std::vector<Candidate> out;

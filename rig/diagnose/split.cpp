@@ -132,7 +132,8 @@ double band_mean(const fra::CrossSpectra& s, double lo, double hi) {
 
 void add_sensor_lag_twin(const Problem& pr, std::vector<HypothesisFit>& hs, const FitOptions& fit) {
   auto it = std::find_if(hs.begin(), hs.end(), [](const HypothesisFit& h) {
-    return h.effects.size() == 1 && h.effects[0].effect == Effect::kExtraLag;
+    return h.effects.size() == 1 && h.effects[0].effect == Effect::kExtraLag &&
+           h.effects[0].place == Place::kInput;  // a transducer's lag is outside the loop
   });
   if (it == hs.end()) return;
   const double fc = 1.0 / (2.0 * std::numbers::pi * it->effects[0].params[0]);

@@ -240,4 +240,22 @@ inline constexpr double kPiFilterMinS = 0.005;
 inline constexpr double kPiFilterMaxS = 0.5;
 inline constexpr double kPiFilterSeedS = 0.05;
 
+// --- Inside the governor's loop, its feedback fitted (governor_loop.hpp) ---
+// The feedback h = (a + b s T_h) / (1 + s T_h) on G' = G / G0. The static share a: +-2,
+// twice the unity loop's either way (a droop governor's loop, seen from the bias, holds a
+// positive static share: on droopsim a lag in it fitted a = -0.5 to -0.6); the rate share
+// b: +-5 (a droop governor's speed feedback is the derivative of power through the swing
+// equation, b of order 1 with T_h the inertia's time scale); T_h from 5 ms (under a 50 Hz
+// sample) to 2 s.
+inline constexpr double kLoopStaticMin = -2.0;
+inline constexpr double kLoopStaticMax = 2.0;
+inline constexpr double kLoopRateMax = 5.0;
+inline constexpr double kLoopFilterMinS = 0.005;
+inline constexpr double kLoopFilterMaxS = 2.0;
+// Starting feedbacks {a, b, T_h}: a power loop (a slow and a fast filter) and a speed loop.
+inline constexpr double kLoopSeeds[][3] = {{1.0, 0.0, 0.1}, {0.0, 1.5, 0.04}, {1.0, 0.0, 0.01}};
+// A fitted share at this fraction of its bound or more stopped there (a stand-in for some
+// other shape, place_credible).
+inline constexpr double kLoopAtBound = 0.98;
+
 }  // namespace rig::diagnose::thresholds

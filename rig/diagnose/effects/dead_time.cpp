@@ -1,7 +1,8 @@
 // dead_time: a dead time the model lacks (or has too much of), extra_delay_s added to the
 // baseline's. Seeded from the slope of the phase error. Also tried on the governor's error
-// (placement.hpp, "error"): a delay inside the loop (a fuel transport delay) changes the
-// loop's dynamics, not only the output's timing; it cannot be negative there.
+// (placement.hpp, "error") and inside the governor's loop with its feedback fitted
+// ("governor_loop"): a delay inside the loop (a fuel transport delay) changes the loop's
+// dynamics, not only the output's timing; it cannot be negative there.
 // Plant: engine.dead_time_s = Td0 + extra_delay_s, Td0 the effective fuel dead time
 // (dead_time_s if > 0, else 30/N + 60/(n N)).
 #include <fmt/format.h>
@@ -12,6 +13,7 @@
 
 #include "rig/diagnose/diagnose.hpp"
 #include "rig/diagnose/effects/common.hpp"
+#include "rig/diagnose/governor_loop.hpp"
 
 namespace rig::diagnose {
 namespace {
@@ -42,9 +44,14 @@ double apply_on_error(const Params& p, std::span<const double> e, double, double
   return (1.0 - frac) * at(whole) + frac * at(whole + 1);
 }
 
+// Inside the governor's loop with its feedback fitted: the delay's Pade approximant.
+void loop_factor(const Params& p, Eigen::VectorXd& num, Eigen::VectorXd& den) {
+  pade_delay(p[0], num, den);
+}
+
 std::string meaning(const AppliedEffect& e, const HypothesisFit&, const Problem& pr) {
   const auto& p = e.params;
-  if (e.place == Place::kError)
+  if (e.place == Place::kError || e.place == Place::kGovernorLoop)
     return fmt::format(
         "a dead time of {:.0f} ms is missing inside the governor's loop (a transport delay "
         "such as the fuel's: it slows the loop's response, not only the output's timing)",
@@ -71,6 +78,11 @@ void to_plant(const PlantContext& c, PlantTarget& m) {
         fmt::format("fuel dead time {:.4g} s + extra_delay_s {:.4g} s", td0, p[0]));
 }
 
+// Inside the loop a delay is positive (the approximant of a negative one is no delay).
+bool credible(const AppliedEffect& e, const DataScales& s) {
+  return e.place != Place::kGovernorLoop || e.params[0] > 0.5 * s.dt_s;
+}
+
 }  // namespace
 
 const EffectModel kDeadTimeEffect{
@@ -82,8 +94,10 @@ const EffectModel kDeadTimeEffect{
     .seeds = seeds,
     .apply_linear = apply,
     .apply_on_error = apply_on_error,
+    .loop_factor = loop_factor,
     .explain = meaning,
     .map_to_plant = to_plant,
+    .credible = credible,
 };
 
 }  // namespace rig::diagnose

@@ -1,8 +1,9 @@
 // extra_lag: a first-order lag 1 / (T s + 1) the plant has and the model lacks. Seeded from
-// the phase lag. Its twin sensor_lag (sensor_lag.cpp) is the same lag in the transducer and
-// shares these functions.
-// Plant: engine.combustion_lag_s += time_constant_s (time constants add: the sum keeps the
-// lag's low-frequency phase, 1st order).
+// the phase lag. Also tried inside the governor's loop (placement.hpp, "governor_loop"): an
+// actuator's or the combustion's lag, which the loop partly works around. Its twin sensor_lag
+// (sensor_lag.cpp) is the same lag in the transducer and shares these functions. Plant:
+// engine.combustion_lag_s += time_constant_s (time constants add: the sum keeps the lag's
+// low-frequency phase, 1st order).
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -11,6 +12,7 @@
 #include "rig/diagnose/blocks.hpp"
 #include "rig/diagnose/diagnose.hpp"
 #include "rig/diagnose/effects/common.hpp"
+#include "rig/diagnose/governor_loop.hpp"
 
 namespace rig::diagnose {
 namespace effects {
@@ -32,10 +34,20 @@ void lag_apply_linear(model::TransferFunction& tf, const Params& p) {
 }  // namespace effects
 namespace {
 
+// Inside the governor's loop: F = 1 / (T s + 1).
+void loop_factor(const Params& p, Eigen::VectorXd& num, Eigen::VectorXd& den) {
+  num = Eigen::VectorXd::Ones(1);
+  den = Eigen::Vector2d(p[0], 1.0);
+}
+
 std::string meaning(const AppliedEffect& e, const HypothesisFit&, const Problem&) {
   const auto& p = e.params;
-  return fmt::format("a first-order lag of {:.0f} ms (corner {:.2f} Hz) is missing in the plant",
-                     1e3 * p[0], 1.0 / (2.0 * std::numbers::pi * p[0]));
+  return fmt::format("a first-order lag of {:.0f} ms (corner {:.2f} Hz) is missing {}", 1e3 * p[0],
+                     1.0 / (2.0 * std::numbers::pi * p[0]),
+                     e.place == Place::kGovernorLoop
+                         ? "inside the governor's loop (an actuator's or the combustion's lag, "
+                           "which the loop works around)"
+                         : "in the plant");
 }
 
 void to_plant(const PlantContext& c, PlantTarget& m) {
@@ -55,6 +67,7 @@ const EffectModel kExtraLagEffect{
     .parameter_specs = effects::lag_parameter_specs,
     .seeds = effects::lag_seeds,
     .apply_linear = effects::lag_apply_linear,
+    .loop_factor = loop_factor,
     .explain = meaning,
     .map_to_plant = to_plant,
 };
