@@ -24,7 +24,7 @@ constexpr double kTwoPi = 2.0 * std::numbers::pi;
 // (governor_loop.hpp); but on the governor's error (a dead time inside the loop), where the
 // error loop applies it instead.
 void apply_linear(model::TransferFunction& tf, const AppliedEffect& e) {
-  if (e.place == Place::kError) return;
+  if (on_error(e.place)) return;
   const EffectModel& m = effect_model(e.effect);
   if (e.place == Place::kGovernorLoop) {
     if (!m.loop_factor)
@@ -204,19 +204,26 @@ void apply_at_output(const Problem& pr, std::span<const AppliedEffect> effects,
       z = g0 * apply_input(pr, e, z / g0);
 }
 
+// The fitted feedback of an effect's place (the unity one where it has none).
+LoopFeedback loop_feedback_of(const AppliedEffect& e) {
+  return feedback_fitted(e.place) ? loop_feedback(e.place_params) : LoopFeedback{};
+}
+
 // N of the error loop's effect (error_loop.hpp): on the error itself, or after the PI.
 std::function<double(std::span<const double>)> error_effect(const Problem& pr,
                                                             const AppliedEffect& err) {
   const EffectModel& m = effect_model(err.effect);
-  if (err.place == Place::kPiLoop) {
+  const LoopFeedback h = loop_feedback_of(err);
+  const LoopFeedback* fb = feedback_fitted(err.place) ? &h : nullptr;
+  if (after_pi(err.place)) {
     const PiGovernor gov = pi_governor(err.place_params);
     const double sigma = pr.scales.u_std;  // a: the bias's rms
     const auto step = m.step;
     return pi_loop_on_error([step, &p = err.params, sigma, dt_s = pr.dt_s](
                                 StepState& s, double x) { return step(p, s, x, sigma, dt_s); },
-                            pi_signal(pr, gov).k, gov, pr.dt_s);
+                            pi_signal(pr, gov, fb).k, gov, pr.dt_s);
   }
-  const Eigen::VectorXd e0 = pr.u - pr.baseline_z / pr.scales.dc_gain;
+  const Eigen::VectorXd e0 = linear_error(pr, fb);
   const double sigma = std::sqrt((e0.array() - e0.mean()).square().mean());
   return [on_error = m.apply_on_error, &p = err.params, sigma,
           dt_s = pr.dt_s](std::span<const double> e) { return on_error(p, e, sigma, dt_s); };
@@ -246,10 +253,9 @@ ModelOutput model_output(const Problem& pr, std::span<const AppliedEffect> effec
     const EffectKind kind = kind_of(e.effect);
     input_side = input_side || kind != EffectKind::kDisturbance;
     feedback = feedback || kind == EffectKind::kFeedback;
-    if (e.place == Place::kError || e.place == Place::kPiLoop) {
+    if (in_error_loop(e.place)) {
       if (err) throw std::invalid_argument("model_output: two effects in the error loop");
-      if (e.place == Place::kError ? !effect_model(e.effect).apply_on_error
-                                   : !effect_model(e.effect).step)
+      if (on_error(e.place) ? !effect_model(e.effect).apply_on_error : !effect_model(e.effect).step)
         throw std::invalid_argument(std::string("model_output: no form on the error for ") +
                                     to_string(e.effect));
       err = &e;
@@ -278,7 +284,11 @@ ModelOutput model_output(const Problem& pr, std::span<const AppliedEffect> effec
     z = linear_output(pr, effects, out.tf, loop, v, feedback);
     if (fb) z = close_feedback(pr, effects, out.tf, loop, *fb, v, feedback, std::move(z));
     // The loop tracks the bias as the input-placed effects left it (v).
-    if (err) z = close_error_loop(out.tf, v, z, s.dc_gain, pr.dt_s, error_effect(pr, *err));
+    if (err) {
+      const LoopFeedback h = loop_feedback_of(*err);
+      z = close_error_loop(out.tf, v, z, s.dc_gain, pr.dt_s, error_effect(pr, *err),
+                           feedback_fitted(err->place) ? &h : nullptr);
+    }
     apply_at_output(pr, effects, z);
     const Eigen::Index n = z.size();
     if (pr.active_from > 0) z.head(pr.active_from) = pr.baseline_z.head(pr.active_from);

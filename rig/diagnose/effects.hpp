@@ -92,7 +92,22 @@ struct DataScales {
 std::vector<ParamSpec> parameter_specs(Effect effect, const DataScales& scales);
 
 // Where an input-side nonlinearity acts (placement.hpp); other effects are at kInput.
-enum class Place { kInput, kInLoop, kOutput, kFeedback, kError, kPiLoop, kGovernorLoop };
+enum class Place {
+  kInput,
+  kInLoop,
+  kOutput,
+  kFeedback,
+  kError,
+  kPiLoop,
+  kGovernorLoop,
+  kGovernorError,
+  kGovernorPi
+};
+// The error loop's places (error_loop.hpp): on the governor's error, or after its PI; the
+// loop's feedback the unity one, or fitted (the governor_ ones, governor_loop.hpp's h).
+inline bool on_error(Place p) { return p == Place::kError || p == Place::kGovernorError; }
+inline bool after_pi(Place p) { return p == Place::kPiLoop || p == Place::kGovernorPi; }
+inline bool in_error_loop(Place p) { return on_error(p) || after_pi(p); }
 const char* to_string(Place place);
 // How reports name a place: " (in the loop)" after the effect's word ("" at the input), and
 // what the augmented model's "acts" field says of it.

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
 #include <vector>
 
 namespace rig::diagnose {
@@ -17,7 +18,8 @@ constexpr int kSameSamplePasses = 3;
 
 Eigen::VectorXd close_error_loop(const model::TransferFunction& tf_in, const Eigen::VectorXd& u,
                                  const Eigen::VectorXd& z0, double g0, double dt_s,
-                                 const std::function<double(std::span<const double>)>& on_error) {
+                                 const std::function<double(std::span<const double>)>& on_error,
+                                 const LoopFeedback* feedback) {
   const model::TransferFunction tf = model::monic(tf_in);
   const Eigen::Index n = tf.den.size() - 1, samples = u.size();
   Eigen::VectorXd b = Eigen::VectorXd::Zero(n + 1);
@@ -55,6 +57,8 @@ Eigen::VectorXd close_error_loop(const model::TransferFunction& tf_in, const Eig
   };
   std::vector<double> x(nn, 0.0), x_prev(nn, 0.0);
   Eigen::VectorXd y(samples);
+  std::optional<FeedbackFilter> seen;
+  if (feedback) seen.emplace(*feedback, dt_s);
   double ud_prev = 0.0;
   for (Eigen::Index k = 0; k < samples; ++k) {
     // The state at k and the correction G d there, for the d_k guessed so far.
@@ -81,11 +85,12 @@ Eigen::VectorXd close_error_loop(const model::TransferFunction& tf_in, const Eig
     for (int pass = 0; pass < passes; ++pass) {
       c = correction();
       const auto i = static_cast<std::size_t>(k);
-      es[i] = u(k) - (z0(k) - c) / g0;
+      es[i] = seen ? u(k) - seen->at((z0(k) - c) / g0) : u(k) - (z0(k) - c) / g0;
       d[i] = es[i] - on_error(std::span<const double>(es.data(), i + 1));
     }
     if (whole == 0) c = correction();
     y(k) = z0(k) - c;
+    if (seen) seen->advance(y(k) / g0);
     x_prev = x;
     ud_prev = ud(k);
   }

@@ -14,6 +14,7 @@
 #include <span>
 
 #include "rig/diagnose/effect_registry.hpp"
+#include "rig/diagnose/governor_loop.hpp"
 #include "rig/model/transfer_function.hpp"
 
 namespace rig::diagnose {
@@ -23,9 +24,13 @@ namespace rig::diagnose {
 // The correction G d is stepped with the first-order hold of model::simulate (exact for a
 // whole-sample dead time; a fractional one is interpolated between samples, not split at
 // its knot).
+// With `feedback` the governor sees h(y / G0) instead of y / G0 (governor_loop.hpp: the
+// governor_error and governor_pi places): e = u - h(y / G0). The linear loop is still G for
+// any h (y = G u - G d holds whatever the loop's feedback), so N the identity gives z0.
 Eigen::VectorXd close_error_loop(const model::TransferFunction& tf, const Eigen::VectorXd& u,
                                  const Eigen::VectorXd& z0, double g0, double dt_s,
-                                 const std::function<double(std::span<const double>)>& on_error);
+                                 const std::function<double(std::span<const double>)>& on_error,
+                                 const LoopFeedback* feedback = nullptr);
 
 // The governor before a nonlinearity in its loop: a PI and its output filter,
 // C = (1 + 1/(s T_i)) / (1 + s T_f), stepped as x_k = e_k + (dt/T_i) sum_{j<=k} e_j,

@@ -10,6 +10,7 @@
 #include "rig/diagnose/diagnose.hpp"
 #include "rig/diagnose/effect_registry.hpp"
 #include "rig/diagnose/effects/common.hpp"
+#include "rig/diagnose/governor_loop.hpp"
 #include "rig/diagnose/thresholds.hpp"
 #include "rig/diagnose/verdict.hpp"
 
@@ -88,17 +89,22 @@ std::string what_effect_means(const AppliedEffect& e, const HypothesisFit& h, co
   if (e.place == Place::kError && kind_of(e.effect) != EffectKind::kLinear)
     s += ", not on the bias but on the error of the loop the model closes (the bias less the "
          "output over the static gain, in bias-%: a governor's power error)";
-  if (e.place == Place::kPiLoop)
+  if (e.place == Place::kGovernorError)
+    s += ", not on the bias but on the governor's error in the loop the model closes (the bias "
+         "less what the governor sees of the output, in bias-%)";
+  if (after_pi(e.place))
     s += fmt::format(
         ", not on the bias but after the governor's PI (integral time {:.2g} s, output lag "
         "{:.0f} ms), inside the loop that works against it (the actuator or the rack; the "
         "values are the bias-% equivalents there)",
         e.place_params.at(0), 1e3 * e.place_params.at(1));
-  if (e.place == Place::kGovernorLoop)
+  if (feedback_fitted(e.place)) {
+    const LoopFeedback fb = loop_feedback(e.place_params);
     s += fmt::format(
-        "; the governor sees, fitted, {:.2f} of the output and {:.2f} of its rate over "
-        "{:.0f} ms",
-        e.place_params.at(0), e.place_params.at(1), 1e3 * e.place_params.at(2));
+        "; the governor sees, fitted, {:.2f} of the output and its rate times {:.0f} ms, "
+        "filtered over {:.0f} ms",
+        fb.static_share, 1e3 * fb.derivative_s, 1e3 * fb.filter_s);
+  }
   if (e.place == Place::kOutput)
     s += fmt::format(
         ", not on the bias but on the measured output (the values are bias-% equivalents; "

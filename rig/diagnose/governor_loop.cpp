@@ -19,6 +19,29 @@ Eigen::VectorXd poly_subtract(const Eigen::VectorXd& a, const Eigen::VectorXd& b
 
 }  // namespace
 
+FeedbackFilter::FeedbackFilter(const LoopFeedback& h, double dt_s)
+    : static_(h.static_share),
+      rate_(h.derivative_s / std::max(h.filter_s, 1e-300)),
+      q_(std::exp(-dt_s / std::max(h.filter_s, 1e-300))),
+      c_(1.0 + std::expm1(-dt_s / std::max(h.filter_s, 1e-300)) * h.filter_s / dt_s) {}
+
+Eigen::VectorXd feed_back(const LoopFeedback& h, const Eigen::VectorXd& y, double dt_s) {
+  FeedbackFilter f(h, dt_s);
+  Eigen::VectorXd out(y.size());
+  for (Eigen::Index k = 0; k < y.size(); ++k) out(k) = f.at(y(k)), f.advance(y(k));
+  return out;
+}
+
+bool feedback_fitted(Place place) {
+  return place == Place::kGovernorLoop || place == Place::kGovernorError ||
+         place == Place::kGovernorPi;
+}
+
+LoopFeedback loop_feedback(std::span<const double> p) {
+  const std::size_t n = p.size();
+  return {p[n - 3], p[n - 2], p[n - 1]};
+}
+
 bool governor_loop_possible(const model::TransferFunction& tf) {
   const double g0 = tf.dc_gain();
   return std::isfinite(g0) && std::abs(g0) > 1e-12;
@@ -27,8 +50,9 @@ bool governor_loop_possible(const model::TransferFunction& tf) {
 model::TransferFunction close_governor_loop(const model::TransferFunction& tf,
                                             const Eigen::VectorXd& nf, const Eigen::VectorXd& df,
                                             std::span<const double> place_params) {
-  const double a = place_params[0], b = place_params[1], t_h = place_params[2];
-  const Eigen::VectorXd nh = Eigen::Vector2d(b * t_h, a), dh = Eigen::Vector2d(t_h, 1.0);
+  const LoopFeedback h = loop_feedback(place_params);
+  const double a = h.static_share, t_d = h.derivative_s, t_h = h.filter_s;
+  const Eigen::VectorXd nh = Eigen::Vector2d(t_d, a), dh = Eigen::Vector2d(t_h, 1.0);
   const double g0 = tf.dc_gain();
   model::TransferFunction out = tf;
   out.num = g0 * poly_multiply(tf.num, poly_multiply(nf, dh));

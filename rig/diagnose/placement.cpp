@@ -33,10 +33,19 @@ constexpr PlaceWords kPlaceWords[] = {
      "after the PI and output filter of a unity-feedback loop whose closed loop is the tf: "
      "e = u - y / G0, a = k C e, C = (1 + 1 / (s integral_time_s)) / (1 + s filter_lag_s), "
      "y = tf (u - C^-1 (a - N(a)) / k), k from the linear loop's a in the bias's rms"},
+    {Place::kGovernorError, "governor_error", " (on the governor's error, its feedback fitted)",
+     "error: on e = u - h(y / G0) of a loop whose closed loop is the tf, h = (loop_static_share "
+     "+ loop_derivative_s s) / (1 + s loop_filter_s): y = tf (u - (e - N(e)))"},
+    {Place::kGovernorPi, "governor_pi",
+     " (after the governor's PI, in its loop, its feedback fitted)",
+     "after the PI and output filter of a loop whose closed loop is the tf: e = u - h(y / G0), "
+     "h = (loop_static_share + loop_derivative_s s) / (1 + s loop_filter_s), "
+     "a = k C e, C = (1 + 1 / (s integral_time_s)) / (1 + s filter_lag_s), "
+     "y = tf (u - C^-1 (a - N(a)) / k), k from the linear loop's a in the bias's rms"},
     {Place::kGovernorLoop, "governor_loop", " (inside the governor's loop)",
      "inside a loop whose closed loop is the tf (its dead time outside), forward part "
-     "P = G' / (1 - G' h), G' = tf / G0, feedback h = (loop_static_share + loop_rate_share s "
-     "loop_filter_s) / (1 + s loop_filter_s): tf F / (1 - G' h (1 - F))"},
+     "P = G' / (1 - G' h), G' = tf / G0, feedback h = (loop_static_share + loop_derivative_s s) / "
+     "(1 + s loop_filter_s): tf F / (1 - G' h (1 - F))"},
 };
 
 const PlaceWords& words(Place place) {
@@ -54,13 +63,18 @@ const char* place_acts(Place place) { return words(place).acts; }
 std::vector<ParamSpec> place_specs(Place place, const DataScales& s) {
   if (place == Place::kFeedback)
     return {{"feedback_gain", -thresholds::kFeedbackGainMax, thresholds::kFeedbackGainMax, false}};
-  if (place == Place::kPiLoop)
-    return {{"integral_time_s", thresholds::kPiIntegralMinS, thresholds::kPiIntegralMaxS, true},
-            {"filter_lag_s", thresholds::kPiFilterMinS, thresholds::kPiFilterMaxS, true}};
-  if (place == Place::kGovernorLoop)
-    return {{"loop_static_share", thresholds::kLoopStaticMin, thresholds::kLoopStaticMax, false},
-            {"loop_rate_share", -thresholds::kLoopRateMax, thresholds::kLoopRateMax, false},
-            {"loop_filter_s", thresholds::kLoopFilterMinS, thresholds::kLoopFilterMaxS, true}};
+  std::vector<ParamSpec> out;
+  if (after_pi(place))
+    out = {{"integral_time_s", thresholds::kPiIntegralMinS, thresholds::kPiIntegralMaxS, true},
+           {"filter_lag_s", thresholds::kPiFilterMinS, thresholds::kPiFilterMaxS, true}};
+  if (feedback_fitted(place)) {
+    out.push_back({"loop_static_share", thresholds::kLoopStaticMin, thresholds::kLoopStaticMax});
+    out.push_back(
+        {"loop_derivative_s", -thresholds::kLoopDerivativeMaxS, thresholds::kLoopDerivativeMaxS});
+    out.push_back(
+        {"loop_filter_s", thresholds::kLoopFilterMinS, thresholds::kLoopFilterMaxS, true});
+  }
+  if (!out.empty()) return out;
   if (place != Place::kInLoop) return {};
   return {{"front_lag_s", std::max(s.dt_s, thresholds::kFrontLagMinS), thresholds::kFrontLagMaxS,
            true}};
@@ -82,8 +96,14 @@ double in_loop_scale(const Problem& pr, const Eigen::VectorXd& w) {
   return sw > 0.0 ? pr.scales.u_std / sw : 1.0;
 }
 
-PiSignal pi_signal(const Problem& pr, const PiGovernor& gov) {
-  const Eigen::VectorXd e = pr.u - pr.baseline_z / pr.scales.dc_gain;
+Eigen::VectorXd linear_error(const Problem& pr, const LoopFeedback* feedback) {
+  const Eigen::VectorXd y = pr.baseline_z / pr.scales.dc_gain;
+  return feedback ? Eigen::VectorXd(pr.u - feed_back(*feedback, y, pr.dt_s))
+                  : Eigen::VectorXd(pr.u - y);
+}
+
+PiSignal pi_signal(const Problem& pr, const PiGovernor& gov, const LoopFeedback* feedback) {
+  const Eigen::VectorXd e = linear_error(pr, feedback);
   PiSignal out{Eigen::VectorXd(e.size()), 1.0};
   const double r = pr.dt_s / gov.integral_time_s, p = pi_filter_pole(gov.filter_lag_s, pr.dt_s);
   double sum = 0.0, f = 0.0;
@@ -112,10 +132,12 @@ Problem problem_at(const Problem& pr, Place place, std::span<const double> place
     at.u = in_loop_scale(pr, w) * w;
   } else if (place == Place::kOutput || place == Place::kFeedback) {
     at.u = pr.baseline_z / pr.scales.dc_gain;
-  } else if (place == Place::kError) {
-    at.u = pr.u - pr.baseline_z / pr.scales.dc_gain;
-  } else if (place == Place::kPiLoop) {
-    at.u = pi_signal(pr, pi_governor(place_params)).a;
+  } else if (on_error(place)) {
+    const LoopFeedback h = feedback_fitted(place) ? loop_feedback(place_params) : LoopFeedback{};
+    at.u = linear_error(pr, feedback_fitted(place) ? &h : nullptr);
+  } else if (after_pi(place)) {
+    const LoopFeedback h = feedback_fitted(place) ? loop_feedback(place_params) : LoopFeedback{};
+    at.u = pi_signal(pr, pi_governor(place_params), feedback_fitted(place) ? &h : nullptr).a;
   } else {
     return at;
   }
@@ -133,13 +155,23 @@ std::vector<std::vector<AppliedEffect>> placed_starts(Effect effect, Place place
         out.push_back({AppliedEffect{effect, p, place, {c}}});
     return out;
   }
-  if (place == Place::kPiLoop) {
+  // The fitted feedback of the error-loop places starts from a speed loop (a unity one is
+  // the error and pi_loop places' own).
+  const auto& speed = thresholds::kLoopSeeds[thresholds::kSpeedLoopSeed];
+  if (after_pi(place)) {
     for (const double ti_s : thresholds::kPiIntegralSeedsS) {
-      const std::vector<double> gov{ti_s, thresholds::kPiFilterSeedS};
+      std::vector<double> gov{ti_s, thresholds::kPiFilterSeedS};
+      if (feedback_fitted(place)) gov.insert(gov.end(), {speed[0], speed[1], speed[2]});
       const Problem at = problem_at(pr, place, gov);
       for (auto& p : seeds_for(effect, at, loc))
         out.push_back({AppliedEffect{effect, p, place, gov}});
     }
+    return out;
+  }
+  if (place == Place::kGovernorError) {
+    const std::vector<double> h{speed[0], speed[1], speed[2]};
+    const Problem at = problem_at(pr, place, h);
+    for (auto& p : seeds_for(effect, at, loc)) out.push_back({AppliedEffect{effect, p, place, h}});
     return out;
   }
   if (place == Place::kGovernorLoop) {  // a linear effect: its seeds at the input's scales
@@ -165,16 +197,23 @@ bool place_credible(const AppliedEffect& e) {
   if (e.place_params.empty()) return true;
   if (e.place == Place::kInLoop)
     return e.place_params[0] < thresholds::kFrontLagAtBound * thresholds::kFrontLagMaxS;
-  if (e.place == Place::kPiLoop)
-    return e.place_params[0] < thresholds::kFrontLagAtBound * thresholds::kPiIntegralMaxS &&
-           e.place_params[0] * thresholds::kFrontLagAtBound > thresholds::kPiIntegralMinS &&
-           e.place_params.at(1) < thresholds::kFrontLagAtBound * thresholds::kPiFilterMaxS;
-  if (e.place == Place::kGovernorLoop) {
+  if (after_pi(e.place)) {
     const auto& p = e.place_params;
+    // A fitted feedback may carry a governor with no integrator (a droop governor's
+    // proportional action): its integral time may stop at the upper bound.
+    const bool integral_ok = feedback_fitted(e.place) ||
+                             p[0] < thresholds::kFrontLagAtBound * thresholds::kPiIntegralMaxS;
+    if (!integral_ok || p[0] * thresholds::kFrontLagAtBound <= thresholds::kPiIntegralMinS ||
+        p.at(1) >= thresholds::kFrontLagAtBound * thresholds::kPiFilterMaxS)
+      return false;
+  }
+  if (feedback_fitted(e.place)) {
+    const LoopFeedback h = loop_feedback(e.place_params);
     const double at = thresholds::kLoopAtBound;
-    return p[0] < at * thresholds::kLoopStaticMax && p[0] > at * thresholds::kLoopStaticMin &&
-           std::abs(p[1]) < at * thresholds::kLoopRateMax &&
-           p[2] < at * thresholds::kLoopFilterMaxS && p[2] * at > thresholds::kLoopFilterMinS;
+    return h.static_share < at * thresholds::kLoopStaticMax &&
+           h.static_share > at * thresholds::kLoopStaticMin &&
+           std::abs(h.derivative_s) < at * thresholds::kLoopDerivativeMaxS &&
+           h.filter_s < at * thresholds::kLoopFilterMaxS;  // at the lower bound: no filter
   }
   return true;
 }

@@ -19,6 +19,10 @@
 //            y = G (u - C^-1 (a - N(a)) / k): a limit, a play or a hysteresis of the
 //            actuator that the loop around it works against (T_i, integral_time_s, fitted;
 //            for effects stepped one sample at a time, EffectModel::step)
+//   governor_error, governor_pi  the error and pi_loop places with the loop's feedback
+//            fitted: e = u - h(y / G0), h as the governor_loop place's
+//            (governor_loop.hpp, where a linear effect is placed; a droop
+//            governor sees speed, not power)
 // At each place the nonlinearity acts on a signal on the bias's scale: in the loop F u times
 // k = std(u) / std(F u) (the signal there, as many bias-% as it has the bias's rms: how a
 // rack's travel per % of bias is measured), at the output the output over the static gain
@@ -31,6 +35,7 @@
 
 #include "rig/diagnose/effects.hpp"
 #include "rig/diagnose/error_loop.hpp"
+#include "rig/diagnose/governor_loop.hpp"
 #include "rig/model/transfer_function.hpp"
 
 namespace rig::diagnose {
@@ -38,8 +43,10 @@ namespace rig::diagnose {
 struct Problem;
 struct Location;
 
-inline constexpr std::array<Place, 6> kAllPlaces = {
-    Place::kInput, Place::kInLoop, Place::kOutput, Place::kFeedback, Place::kError, Place::kPiLoop};
+// The places of an input-side nonlinearity (a linear effect's: input, error, governor_loop).
+inline constexpr std::array<Place, 8> kAllPlaces = {
+    Place::kInput, Place::kInLoop,        Place::kOutput, Place::kFeedback,
+    Place::kError, Place::kGovernorError, Place::kPiLoop, Place::kGovernorPi};
 
 // Whether the baseline allows the in-loop place (G / F proper: G strictly proper).
 bool in_loop_possible(const model::TransferFunction& tf);
@@ -54,8 +61,13 @@ struct PiSignal {
   Eigen::VectorXd a;
   double k = 1.0;
 };
-PiSignal pi_signal(const Problem& problem, const PiGovernor& governor);
-// The governor of a pi_loop effect's place parameters (integral_time_s, filter_lag_s).
+// With `feedback`, e0 = u - h(z0 / G0) (governor_pi).
+PiSignal pi_signal(const Problem& problem, const PiGovernor& governor,
+                   const LoopFeedback* feedback = nullptr);
+// The error of the linear loop, u - z0 / G0, or u - h(z0 / G0) with `feedback`.
+Eigen::VectorXd linear_error(const Problem& problem, const LoopFeedback* feedback = nullptr);
+// The governor of a pi_loop or governor_pi effect's place parameters (integral_time_s,
+// filter_lag_s first).
 PiGovernor pi_governor(std::span<const double> place_params);
 // G / F: the baseline's linear part after the nonlinearity.
 model::TransferFunction rest_after_front(const model::TransferFunction& tf, double front_lag_s);

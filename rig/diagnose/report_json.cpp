@@ -174,8 +174,7 @@ model::ModelFile augmented_model(const DiagnoseResult& r, const model::ModelFile
       for (std::size_t i = 0; i < e.place_params.size(); ++i) p[place[i].name] = e.place_params[i];
       // On the governor's error even a linear effect (a dead time in the loop) stays out of
       // the tf: the place says how it acts.
-      const bool placed =
-          kind_of(e.effect) == EffectKind::kInputNonlinearity || e.place == Place::kError;
+      const bool placed = kind_of(e.effect) == EffectKind::kInputNonlinearity || on_error(e.place);
       const char* where = placed ? place_acts(e.place)
                           : kind_of(e.effect) == EffectKind::kFeedback
                               ? "output feedback around the tf's rational part"

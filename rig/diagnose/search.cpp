@@ -23,8 +23,8 @@ using thresholds::kRefinedForwardPairs;
 
 // Places that hold one effect only (one front lag, one feedback path, one error loop).
 bool one_per_record(Place p) {
-  return p == Place::kInLoop || p == Place::kFeedback || p == Place::kError ||
-         p == Place::kPiLoop || p == Place::kGovernorLoop;
+  return p == Place::kInLoop || p == Place::kFeedback || in_error_loop(p) ||
+         p == Place::kGovernorLoop;
 }
 
 // Whether a and b can share a model: one effect per loop place, and the error loop (whose
@@ -36,7 +36,7 @@ bool pairable(const AppliedEffect& a, const AppliedEffect& b) {
            kind_of(e.effect) == EffectKind::kFeedback;
   };
   const auto error_loop = [](const AppliedEffect& e) {  // (the governor loop's changes G)
-    return e.place == Place::kError || e.place == Place::kPiLoop || e.place == Place::kGovernorLoop;
+    return in_error_loop(e.place) || e.place == Place::kGovernorLoop;
   };
   if (error_loop(a) && error_loop(b)) return false;
   return !((error_loop(a) && loop(b)) || (error_loop(b) && loop(a)));
@@ -67,8 +67,9 @@ std::vector<Candidate> singles_of(Effect e, const Problem& pr, const Location& l
   for (Place place : kAllPlaces) {
     if (place == Place::kInLoop && !in_loop_possible(pr.tf)) continue;
     if (place == Place::kFeedback && !effect_model(e).in_feedback) continue;
-    if (place == Place::kError && !effect_model(e).apply_on_error) continue;
-    if (place == Place::kPiLoop && !effect_model(e).step) continue;
+    if (on_error(place) && !effect_model(e).apply_on_error) continue;
+    if (after_pi(place) && !effect_model(e).step) continue;
+    if (feedback_fitted(place) && !governor_loop_possible(pr.tf)) continue;
     // On a two-level input any map of the bias itself acts as a linear one: a static map
     // as a gain and an offset, a play or a slew limit the same on every (equal) step.
     if (place == Place::kInput && loc.amp.two_level_input) continue;

@@ -241,19 +241,22 @@ inline constexpr double kPiFilterMaxS = 0.5;
 inline constexpr double kPiFilterSeedS = 0.05;
 
 // --- Inside the governor's loop, its feedback fitted (governor_loop.hpp) ---
-// The feedback h = (a + b s T_h) / (1 + s T_h) on G' = G / G0. The static share a: +-2,
+// The feedback h = (a + s T_d) / (1 + s T_h) on G' = G / G0. The static share a: +-2,
 // twice the unity loop's either way (a droop governor's loop, seen from the bias, holds a
-// positive static share: on droopsim a lag in it fitted a = -0.5 to -0.6); the rate share
-// b: +-5 (a droop governor's speed feedback is the derivative of power through the swing
-// equation, b of order 1 with T_h the inertia's time scale); T_h from 5 ms (under a 50 Hz
-// sample) to 2 s.
+// positive static share: on droopsim a lag in it fitted a = -0.5 to -1.7); the derivative
+// time T_d: +-1 s (a droop governor's speed feedback is the derivative of power through the
+// swing equation; droopsim's lags, delay and slew limit fitted 50-85 ms); T_h from 5 ms
+// (under a 50 Hz sample: no filter, the place's credible lower end) to 2 s.
 inline constexpr double kLoopStaticMin = -2.0;
 inline constexpr double kLoopStaticMax = 2.0;
-inline constexpr double kLoopRateMax = 5.0;
+inline constexpr double kLoopDerivativeMaxS = 1.0;
 inline constexpr double kLoopFilterMinS = 0.005;
 inline constexpr double kLoopFilterMaxS = 2.0;
-// Starting feedbacks {a, b, T_h}: a power loop (a slow and a fast filter) and a speed loop.
-inline constexpr double kLoopSeeds[][3] = {{1.0, 0.0, 0.1}, {0.0, 1.5, 0.04}, {1.0, 0.0, 0.01}};
+// Starting feedbacks {a, T_d, T_h}: a power loop (a slow and a fast filter) and a speed loop.
+inline constexpr double kLoopSeeds[][3] = {{1.0, 0.0, 0.1}, {0.0, 0.06, 0.04}, {1.0, 0.0, 0.01}};
+// The speed loop among them: the error-loop places with a fitted feedback start there only
+// (their unity loop is the error and pi_loop places' own).
+inline constexpr int kSpeedLoopSeed = 1;
 // A fitted share at this fraction of its bound or more stopped there (a stand-in for some
 // other shape, place_credible).
 inline constexpr double kLoopAtBound = 0.98;

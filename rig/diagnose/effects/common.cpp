@@ -35,14 +35,14 @@ double recovery_hi_s(const DataScales& s) {
 }
 
 bool recovery_credible(const AppliedEffect& e, std::size_t i, const DataScales& s) {
-  if (e.place == Place::kPiLoop) return true;  // the PI's own integrator restores it there
+  if (after_pi(e.place)) return true;  // the PI's own integrator restores it there
   return e.params.size() <= i || e.params[i] < thresholds::kAtRecoveryBound * recovery_hi_s(s);
 }
 
 std::string in_loop_words(const AppliedEffect& e, std::size_t i, const DataScales& s) {
   const auto& p = e.params;
   if (p.size() <= i) return "";
-  if (e.place == Place::kPiLoop) {
+  if (after_pi(e.place)) {
     if (p[i] >= thresholds::kAtRecoveryBound * recovery_hi_s(s))
       return ", the governor's integrator held while the limit acts (anti-windup)";
     if (p[i] < 5.0 * s.dt_s) return ", the governor's integrator winding up against it";

@@ -39,7 +39,7 @@ double step(const Params& p, StepState&, double x, double, double) {
 std::string meaning(const AppliedEffect& e, const HypothesisFit&, const Problem& pr) {
   const auto& p = e.params;
   const double su = pr.scales.u_std;
-  if (e.place == Place::kError)
+  if (on_error(e.place))
     return fmt::format(
         "errors within +-{:.3g} ({:.0f} % of the input's standard deviation) have no effect: a "
         "deadband, inside which the governor holds its output",

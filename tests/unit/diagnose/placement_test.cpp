@@ -47,7 +47,7 @@ TEST(Placement, ADeadbandOnTheBiasIsAtTheInputAndTriedAtEachPlace) {
   const DiagnoseResult r = diagnose(in);
   ASSERT_EQ(r.verdict, "deadband") << r.explanation;
   EXPECT_EQ(r.chosen()->effects.front().place, Place::kInput) << r.explanation;
-  int places[kAllPlaces.size()] = {};
+  int places[16] = {};  // by the Place's value
   for (const auto& h : r.hypotheses)
     if (h.effects.size() == 1 && h.effects[0].effect == Effect::kDeadband)
       ++places[static_cast<int>(h.effects[0].place)];
@@ -57,6 +57,10 @@ TEST(Placement, ADeadbandOnTheBiasIsAtTheInputAndTriedAtEachPlace) {
   EXPECT_EQ(places[static_cast<int>(Place::kFeedback)], 0);  // not tried in the feedback
   EXPECT_EQ(places[static_cast<int>(Place::kError)], 1);     // memoryless: on the error
   EXPECT_EQ(places[static_cast<int>(Place::kPiLoop)], 1);    // stepped: after the PI
+  // ... and both with the loop's feedback fitted; a linear effect's place only.
+  EXPECT_EQ(places[static_cast<int>(Place::kGovernorError)], 1);
+  EXPECT_EQ(places[static_cast<int>(Place::kGovernorPi)], 1);
+  EXPECT_EQ(places[static_cast<int>(Place::kGovernorLoop)], 0);
 }
 
 // A place parameter stopped at its bound is the search's stand-in for another shape: an
