@@ -69,8 +69,7 @@ std::vector<ParamSpec> place_specs(Place place, const DataScales& s) {
            {"filter_lag_s", thresholds::kPiFilterMinS, thresholds::kPiFilterMaxS, true}};
   if (feedback_fitted(place)) {
     out.push_back({"loop_static_share", thresholds::kLoopStaticMin, thresholds::kLoopStaticMax});
-    out.push_back(
-        {"loop_derivative_s", -thresholds::kLoopDerivativeMaxS, thresholds::kLoopDerivativeMaxS});
+    out.push_back({"loop_derivative_s", 0.0, thresholds::kLoopDerivativeMaxS});
     out.push_back(
         {"loop_filter_s", thresholds::kLoopFilterMinS, thresholds::kLoopFilterMaxS, true});
   }
@@ -212,7 +211,7 @@ bool place_credible(const AppliedEffect& e) {
     const double at = thresholds::kLoopAtBound;
     return h.static_share < at * thresholds::kLoopStaticMax &&
            h.static_share > at * thresholds::kLoopStaticMin &&
-           std::abs(h.derivative_s) < at * thresholds::kLoopDerivativeMaxS &&
+           h.derivative_s < at * thresholds::kLoopDerivativeMaxS &&
            h.filter_s < at * thresholds::kLoopFilterMaxS;  // at the lower bound: no filter
   }
   return true;

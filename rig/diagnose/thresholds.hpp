@@ -244,12 +244,15 @@ inline constexpr double kPiFilterSeedS = 0.05;
 // The feedback h = (a + s T_d) / (1 + s T_h) on G' = G / G0. The static share a: +-2,
 // twice the unity loop's either way (a droop governor's loop, seen from the bias, holds a
 // positive static share: on droopsim a lag in it fitted a = -0.5 to -1.7); the derivative
-// time T_d: +-1 s (a droop governor's speed feedback is the derivative of power through the
-// swing equation; droopsim's lags, delay and slew limit fitted 50-85 ms); T_h from 5 ms
-// (under a 50 Hz sample: no filter, the place's credible lower end) to 2 s.
+// time T_d: 0 (a power loop) to 0.5 s. A droop governor sees speed, the derivative of power
+// through the synchronising torque: T_d ~ 1 / (K_s w_base droop) = 1 / (1.5 * 314 * 0.04)
+// ~ 0.05 s (droopsim's lags, delay and slew limit fitted 50-85 ms); ten times that is the
+// most a set on a grid has. A negative derivative is no governor's: fitted free, it stood in
+// for a gain change or a damping change on gensim's power loop. T_h from 5 ms (under a
+// 50 Hz sample: no filter, the place's credible lower end) to 2 s.
 inline constexpr double kLoopStaticMin = -2.0;
 inline constexpr double kLoopStaticMax = 2.0;
-inline constexpr double kLoopDerivativeMaxS = 1.0;
+inline constexpr double kLoopDerivativeMaxS = 0.5;
 inline constexpr double kLoopFilterMinS = 0.005;
 inline constexpr double kLoopFilterMaxS = 2.0;
 // Starting feedbacks {a, T_d, T_h}: a power loop (a slow and a fast filter) and a speed loop.

@@ -13,7 +13,10 @@ judged against droopsim's own truth.
   * a combustion lag inside the speed loop (d005): `extra_lag` inside the governor's loop
     (the `governor_loop` place, its feedback fitted; named `resonance`, a moved mode, before
     that place), its time constant within 20 %;
-  * an injection delay inside that loop (d000): `dead_time` there, within 20 %.
+  * an injection delay inside that loop (d000): `dead_time` there, within 20 %;
+  * a linkage play between actuator and rack (d035): `backlash` after the governor's PID
+    with the loop's feedback fitted (`governor_pi`), its half-width (bias-% equivalent at
+    that place) within 20 % of the play over the rack's rms.
 """
 import json
 import os
@@ -67,7 +70,7 @@ class DroopsimCases(unittest.TestCase):
             self.assertEqual(e["place"], place, rep["explanation"])
         truth = truths[0]["truth"]
         got = e["params"][param]
-        print(f"  {param} {got:.4f} s against {truth:.4f} s at {e['place']}", flush=True)
+        print(f"  {param} {got:.4f} against {truth:.4f} at {e['place']}", flush=True)
         self.assertLess(abs(got - truth), PARAM_TOL * truth, rep["explanation"])
         self.assertGreater(h["validation_fit_after"], h["validation_fit_before"])
 
@@ -83,6 +86,10 @@ class DroopsimCases(unittest.TestCase):
 
     def test_a_combustion_lag_inside_the_speed_loop_is_a_lag_there(self):
         self.check_lag(*self.run_case("extra_lag", "plain", 187690), place="governor_loop")
+
+    def test_a_linkage_play_is_a_backlash_after_the_governor(self):
+        self.check_effect(*self.run_case("backlash", "plain", 913125), ("backlash",),
+                          "half_width", place="governor_pi")
 
     def test_an_injection_delay_inside_the_speed_loop_is_a_dead_time_there(self):
         self.check_effect(*self.run_case("dead_time", "plain", 903395), ("dead_time",),
