@@ -14,9 +14,9 @@ judged against droopsim's own truth.
     (the `governor_loop` place, its feedback fitted; named `resonance`, a moved mode, before
     that place), its time constant within 20 %;
   * an injection delay inside that loop (d000): `dead_time` there, within 20 %;
-  * a linkage play between actuator and rack (d035): `backlash` after the governor's PID
-    with the loop's feedback fitted (`governor_pi`), its half-width (bias-% equivalent at
-    that place) within 20 % of the play over the rack's rms.
+  * a linkage play between actuator and rack behind the declared coupling (d039): `backlash`
+    after the governor's PID with the loop's feedback fitted (`governor_pi`), its half-width
+    (bias-% equivalent at that place) within 20 % of the play over the rack's rms.
 """
 import json
 import os
@@ -88,7 +88,7 @@ class DroopsimCases(unittest.TestCase):
         self.check_lag(*self.run_case("extra_lag", "plain", 187690), place="governor_loop")
 
     def test_a_linkage_play_is_a_backlash_after_the_governor(self):
-        self.check_effect(*self.run_case("backlash", "plain", 913125), ("backlash",),
+        self.check_effect(*self.run_case("backlash", "coupled8", 201186), ("backlash",),
                           "half_width", place="governor_pi")
 
     def test_an_injection_delay_inside_the_speed_loop_is_a_dead_time_there(self):
