@@ -26,7 +26,13 @@ int screen_decimation(const Problem& pr) {
   band_hz = pr.scales.u_rate_std / (2.0 * std::numbers::pi * std::max(pr.scales.u_std, 1e-300));
   const int f =
       static_cast<int>(std::floor(1.0 / (pr.dt_s * kScreenOversampling * std::max(band_hz, 1e-9))));
-  return std::clamp(f, 1, kScreenMaxDecimation);
+  int most = kScreenMaxDecimation;
+  // Keep a whole sample of the model's dead time: under one, the loops on the governor's
+  // error solve each sample in several passes (error_loop.cpp), which costs more than the
+  // samples saved.
+  if (pr.tf.delay_s >= pr.dt_s)
+    most = std::min(most, static_cast<int>(std::floor(pr.tf.delay_s / pr.dt_s + 1e-9)));
+  return std::clamp(f, 1, most);
 }
 
 // Every f-th sample of the problem (the input and output as recorded, the weights and
