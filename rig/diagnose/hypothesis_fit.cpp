@@ -46,6 +46,10 @@ std::vector<AppliedEffect> unpack(const Layout& l, const Eigen::VectorXd& x) {
   return out;
 }
 
+// A residual beyond this is a model that ran away: its square, summed over any record,
+// stays finite (1e300 x samples).
+constexpr double kRunawayResidual = 1e150;
+
 // The least-squares functor Eigen's LevenbergMarquardt expects.
 struct Residual {
   using Scalar = double;
@@ -70,7 +74,10 @@ struct Residual {
       const Eigen::Index k = rows[i];
       f(static_cast<Eigen::Index>(i)) = problem->y(k) - yhat(k);
     }
-    if (!f.allFinite()) f.setConstant(1e150);
+    // A model that did not settle (NaN) or ran away (a residual whose square overflows):
+    // one large constant, so that the search backs off and the cost stays finite.
+    if (!f.allFinite() || f.cwiseAbs().maxCoeff() > kRunawayResidual)
+      f.setConstant(kRunawayResidual);
     return 0;
   }
 };
@@ -126,8 +133,9 @@ HypothesisFit fit_hypothesis(const Problem& pr,
   std::stable_sort(points.begin(), points.end(),
                    [](const auto& a, const auto& b) { return a.first < b.first; });
   if (points.size() > options.searched_starts) points.resize(options.searched_starts);
+  // The best start as evaluated stands when no search ends with a finite cost.
   double best_cost = std::numeric_limits<double>::infinity();
-  Eigen::VectorXd best_x;
+  Eigen::VectorXd best_x = points.front().second;
   for (auto& point : points) {
     Eigen::VectorXd& x = point.second;
     Eigen::NumericalDiff<Residual> diff(fn);

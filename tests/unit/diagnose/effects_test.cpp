@@ -6,6 +6,7 @@
 #include "concealed.hpp"
 #include "rig/diagnose/augmented_model.hpp"
 #include "rig/diagnose/effect_registry.hpp"
+#include "rig/diagnose/hypothesis_fit.hpp"
 
 namespace rig::diagnose {
 namespace {
@@ -117,6 +118,28 @@ TEST(Effects, ModelOutputFitsOffsetAndPeriodicDisturbance) {
   const ModelOutput out = model_output(pr, std::span<const AppliedEffect>(&p, 1));
   EXPECT_LT((out.yhat - pr.y).cwiseAbs().maxCoeff(), 1e-6);
   EXPECT_NEAR(out.derived.front().second, 0.7, 1e-6);
+}
+
+// A model that runs away (finite outputs whose squares overflow: F-16's odd-multisine
+// record met one inside a loop) is searched back from, never left without a result.
+TEST(Effects, ARunawayResidualLeavesTheFitWithAFiniteResult) {
+  Problem pr;
+  pr.tf = nominal_genset_model();
+  pr.dt_s = 0.01;
+  const Eigen::Index n = 2000;
+  const Eigen::ArrayXd t = Eigen::ArrayXd::LinSpaced(n, 0.0, static_cast<double>(n - 1)) * 0.01;
+  pr.u = (2 * std::numbers::pi * 0.7 * t).sin().matrix();
+  pr.est_weight = pr.val_weight = Eigen::ArrayXd::Ones(n);
+  finish_problem(pr);
+  pr.y = pr.baseline_z;
+  pr.y(100) = 1e200;  // finite, but its square is not
+  const std::vector<std::vector<AppliedEffect>> starts{{{Effect::kExtraLag, {0.05}}},
+                                                       {{Effect::kExtraLag, {0.2}}}};
+  const HypothesisFit h = fit_hypothesis(pr, starts, pr.baseline_z, FitOptions{});
+  ASSERT_EQ(h.effects.size(), 1u);
+  ASSERT_EQ(h.effects[0].params.size(), 1u);
+  EXPECT_TRUE(std::isfinite(h.effects[0].params[0]));
+  EXPECT_GT(h.effects[0].params[0], 0.0);
 }
 
 }  // namespace
