@@ -58,6 +58,9 @@ struct AmplitudeLocation {
   // r on the baseline's response to the output's direction of motion sign(dz/dt): a
   // hysteretic restoring force fed back from the output (placement.hpp, feedback).
   double output_direction_z = 0.0;
+  // The direction's z beside the model's response to du/dt as well (what a missing lag or
+  // delay adds): a play's evidence beyond a lag's (verdict.cpp, thresholds.hpp).
+  double direction_beyond_lag_z = 0.0;
   // The model output's own level: r regressed on yhat restricted to each fifth of its signed
   // level (a static map that bends or stops at the output, a tank that overflows), chi^2
   // against one common gain. Reported, not part of the decision: it fired (33.7 against

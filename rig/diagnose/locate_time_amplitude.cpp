@@ -191,20 +191,32 @@ struct DirectionFit {
   double beta = 0.0, sd = 1.0, z = 0.0;
 };
 
-// r on [yh, the direction regressor]: the direction's coefficient and its z. (A column of
-// yh's rate beside them, for a lag, would take the evidence of a play inside a loop, whose
-// first effect through the loop is a lag's.)
+// r on [yh, (the rate regressor,) the direction regressor]: the direction's coefficient
+// and its z. (The test of a play is without the rate's column: a play inside a loop acts
+// first as a lag, and that column would take its evidence. With it, the z is the evidence
+// of a play beyond any lag: direction_beyond_lag_z.)
 DirectionFit direction_fit(const Eigen::VectorXd& yh, const Eigen::VectorXd& direction,
-                           const Eigen::VectorXd& r, double n_eff) {
-  Eigen::MatrixXd x(yh.size(), 2);
+                           const Eigen::VectorXd& r, double n_eff,
+                           const Eigen::VectorXd* rate = nullptr) {
+  const Eigen::Index p = rate ? 3 : 2;
+  Eigen::MatrixXd x(yh.size(), p);
   x.col(0) = yh;
-  x.col(1) = direction;
+  if (rate) x.col(1) = *rate;
+  x.col(p - 1) = direction;
   const Ls fit = least_squares(x, r);
   DirectionFit out;
-  out.beta = fit.beta(1);
-  out.sd = std::sqrt(std::max(1e-300, fit.rss / std::max(1.0, n_eff - 2) * fit.inv(1, 1)));
+  out.beta = fit.beta(p - 1);
+  out.sd = std::sqrt(std::max(
+      1e-300, fit.rss / std::max(1.0, n_eff - static_cast<double>(p)) * fit.inv(p - 1, p - 1)));
   out.z = out.beta / out.sd;
   return out;
+}
+
+// The first difference over dt (0 at the first sample).
+Eigen::VectorXd rate_of(const Eigen::VectorXd& x, double dt_s) {
+  Eigen::VectorXd d = Eigen::VectorXd::Zero(x.size());
+  for (Eigen::Index k = 1; k < x.size(); ++k) d(k) = (x(k) - x(k - 1)) / dt_s;
+  return d;
 }
 
 }  // namespace
@@ -270,9 +282,11 @@ AmplitudeLocation locate_amplitude(const Problem& pr, const Eigen::VectorXd& r_a
   a.sign_z = var_diff > 0.0 ? (sign.beta(0) - sign.beta(1)) / std::sqrt(var_diff) : 0.0;
   // Direction: play or friction adds -b sign(du/dt) before the plant: regressor G(sign(du)),
   // beside the model output (what a gain changes).
-  const DirectionFit in =
-      direction_fit(yh, masked_response(pr, direction_of(pr.u)).tail(m), r, n_eff);
+  const Eigen::VectorXd g_direction = masked_response(pr, direction_of(pr.u)).tail(m);
+  const DirectionFit in = direction_fit(yh, g_direction, r, n_eff);
   a.direction_z = in.z;
+  const Eigen::VectorXd g_rate = masked_response(pr, rate_of(pr.u, pr.dt_s)).tail(m);
+  a.direction_beyond_lag_z = direction_fit(yh, g_direction, r, n_eff, &g_rate).z;
   a.rising = {0.0, in.beta, in.sd};  // the play: -beta is the half-width in input units
   a.falling = {0.0, -in.beta, in.sd};
   // The output's direction: a hysteretic restoring force fed back from the output adds

@@ -97,6 +97,7 @@ json location_json(const DiagnoseResult& r) {
             {"direction_z", loc.amp.direction_z},
             {"direction_dependent", loc.amp.direction_dependent},
             {"output_direction_z", loc.amp.output_direction_z},
+            {"direction_beyond_lag_z", loc.amp.direction_beyond_lag_z},
             {"two_level_input", loc.amp.two_level_input}}},
           {"residual_tests",
            {{"whiteness_ratio", loc.tests.whiteness_ratio},

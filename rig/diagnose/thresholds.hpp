@@ -35,11 +35,30 @@ inline constexpr double kCloseAlternativePct = kNonlinearOverLinearPct;
 // than the fitting noise of two placed nonlinearities.
 inline constexpr double kNestedMarginPct = 1.0;
 
+// A resonance that re-damps one of the model's own modes is a damping change (verdict.cpp):
+// its zeros cancel the mode (frequency within kRedampZerosFrequency, damping ratio within
+// kRedampZerosDamping, relative) and its poles moved the damping ratio at least
+// kDampingOverStiffness times as much (relative) as the frequency. A change of stiffness or
+// inertia moves both by the same relative amount (f ~ sqrt(k/m), zeta ~ c / sqrt(k m)); a
+// change of damping moves the damping ratio alone (droopsim's damper windings: the swing
+// mode's damping ratio 0.147 -> 0.10, its frequency 2 %).
+inline constexpr double kRedampZerosFrequency = 0.1;
+inline constexpr double kRedampZerosDamping = 0.3;
+inline constexpr double kDampingOverStiffness = 3.0;
+
 // A play or a hysteresis loop is the verdict only when the location's direction test
 // (the residual on G(sign du/dt), locate_time_amplitude.cpp) gives |z| >= 3: a direction
 // effect at three standard errors. On gensim every play and hysteresis case shows
 // |z| 2.8-8.7 (2.8 the one present in half the record), every deadband case 0.2-1.5.
 inline constexpr double kDirectionEvidenceZ = 3.0;
+// The same test with the model's response to du/dt beside it (what a missing lag or delay
+// adds): a play's sign at this z is a play beyond any lag, and a play or hysteresis loop
+// within kNonlinearOverLinearPct of the best hypothesis is then the verdict (verdict.cpp).
+// Measured (seed 1): droopsim's plays and hysteresis after the governor -2.2 to -3.8
+// (half-way and behind 3x the grid's wander -1.0, -1.2); every other case of droopsim and
+// gensim -2.1 (a saturation) or above (a rate limit: +3 to +8, the other sign); gensim's
+// plays and hysteresis inside the PI loop -1.9 to +2.1 (no evidence: there the margin holds).
+inline constexpr double kDirectionBeyondLagZ = 2.5;
 
 // --- Location (locate.cpp, locate_time_amplitude.cpp; docs/diagnose.md Method step 2) ---
 // A residual spectral line: its PSD bin exceeds this many times the median of its

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numbers>
 
 #include "rig/diagnose/effect_registry.hpp"
 #include "rig/diagnose/placement.hpp"
@@ -9,6 +10,8 @@
 namespace rig::diagnose {
 namespace {
 
+using thresholds::kDampingOverStiffness;
+using thresholds::kDirectionBeyondLagZ;
 using thresholds::kDirectionEvidenceZ;
 using thresholds::kDriftMaterialFraction;
 using thresholds::kDriftMaterialGainPct;
@@ -16,6 +19,8 @@ using thresholds::kDriftMaterialOfLevel;
 using thresholds::kNestedMarginPct;
 using thresholds::kNonlinearOverLinearPct;
 using thresholds::kOperatingLevelStds;
+using thresholds::kRedampZerosDamping;
+using thresholds::kRedampZerosFrequency;
 using thresholds::kUnseenInputGainPct;
 
 // Every effect of h that needs the direction test's evidence has it (thresholds.hpp): on
@@ -85,14 +90,32 @@ bool sampling_convention_only(const HypothesisFit& h, const Problem& pr) {
 // effect that adds min_gain to what its disturbance alone explains, unless there is none
 // (then a disturbance alone explains it). When they passed (and the output was not clipped),
 // an input-side effect found behind a disturbance must add kUnseenInputGainPct to it.
-int choose_raw(const DiagnoseResult& r, double min_gain, bool linear_only = false) {
+// What choose_raw may pick: any hypothesis, one without a nonlinearity, one with a play or a
+// hysteresis loop (an effect that needs the direction test's evidence).
+enum class Only { kAny, kLinear, kDirection };
+
+bool has_direction_effect(const HypothesisFit& h) {
+  return std::any_of(h.effects.begin(), h.effects.end(), [](const AppliedEffect& e) {
+    return effect_model(e.effect).needs_direction_evidence;
+  });
+}
+
+// A play's direction effect beyond what any lag or delay adds (thresholds.hpp): the sign of
+// a play's (it subtracts b sign(du/dt) from the input it acts on).
+bool play_beyond_lag(const Location& loc) {
+  return !loc.amp.two_level_input && loc.amp.direction_beyond_lag_z <= -kDirectionBeyondLagZ;
+}
+
+int choose_raw(const DiagnoseResult& r, double min_gain, Only only = Only::kAny) {
   const bool input = r.location.input_mismatch;
   const bool unseen = !input && r.location.clip.side == 0;
   int best_any = -1;
   for (std::size_t i = 0; i < r.hypotheses.size(); ++i) {
     const auto& h = r.hypotheses[i];
     if (h.score < min_gain) break;
-    if (linear_only && has_nonlinearity(h)) continue;
+    if ((only == Only::kLinear && has_nonlinearity(h)) ||
+        (only == Only::kDirection && !has_direction_effect(h)))
+      continue;
     if (!direction_evidenced(h, r.location) || !credible(h, r.problem.scales) ||
         !pair_adds(r.hypotheses, h))
       continue;
@@ -141,27 +164,85 @@ bool could_be_verdict(const HypothesisFit& h, const Location& loc, const DataSca
   return credible(h, scales) && direction_evidenced(h, loc);
 }
 
+// The best hypothesis that is h with `from` replaced by `to` (at any place), its other
+// effects as h has them; -1 when none was fitted.
+int substituted(const DiagnoseResult& r, const HypothesisFit& h, Effect from, Effect to) {
+  const auto same = [&](const AppliedEffect& a, const AppliedEffect& b) {
+    return a.effect == from ? b.effect == to : (b.effect == a.effect && b.place == a.place);
+  };
+  for (std::size_t j = 0; j < r.hypotheses.size(); ++j) {  // ranked: the first is the best
+    const auto& g = r.hypotheses[j];
+    if (g.effects.size() != h.effects.size()) continue;
+    const bool match =
+        h.effects.size() == 1
+            ? same(h.effects[0], g.effects[0])
+            : (same(h.effects[0], g.effects[0]) && same(h.effects[1], g.effects[1])) ||
+                  (same(h.effects[0], g.effects[1]) && same(h.effects[1], g.effects[0]));
+    if (match) return static_cast<int>(j);
+  }
+  return -1;
+}
+
+// Whether a resonance only re-damps one of the model's own modes (thresholds.hpp): the
+// factor's zeros sit on the mode, its poles moved the damping ratio, not the frequency.
+bool redamps_own_mode(const AppliedEffect& e, const model::TransferFunction& tf) {
+  if (e.effect != Effect::kResonance || e.params.size() < 4 || !(e.params[3] > 0.0)) return false;
+  const double f = e.params[0], zeta = e.params[1];
+  const double f_zeros = f / std::sqrt(e.params[3]);
+  const double zeta_zeros = zeta * e.params[2] / std::sqrt(e.params[3]);
+  const Eigen::VectorXcd poles = tf.poles();
+  for (Eigen::Index i = 0; i < poles.size(); ++i) {
+    if (poles(i).imag() <= 0.0) continue;
+    const double f0 = std::abs(poles(i)) / (2.0 * std::numbers::pi);
+    const double zeta0 = -poles(i).real() / std::abs(poles(i));
+    if (std::abs(f_zeros - f0) > kRedampZerosFrequency * f0 ||
+        std::abs(zeta_zeros - zeta0) > kRedampZerosDamping * zeta0)
+      continue;
+    return std::abs(zeta - zeta_zeros) / zeta_zeros >=
+           kDampingOverStiffness * std::abs(f - f_zeros) / f_zeros;
+  }
+  return false;
+}
+
+// An effect that contains a simpler one must beat it by a margin (thresholds.hpp), alone or
+// beside the same other effect; a resonance that only re-damps the model's own mode is the
+// damping change it describes.
+int prefer_simpler(const DiagnoseResult& r, int i, double min_gain) {
+  const auto& h = r.hypotheses[static_cast<std::size_t>(i)];
+  for (const auto& e : h.effects) {
+    if (redamps_own_mode(e, r.problem.tf))
+      if (const int j = substituted(r, h, e.effect, Effect::kLoadDamping);
+          j >= 0 && r.hypotheses[static_cast<std::size_t>(j)].score >= min_gain)
+        return j;
+    if (const auto simpler = effect_model(e.effect).generalises)
+      if (const int j = substituted(r, h, e.effect, *simpler);
+          j >= 0 && r.hypotheses[static_cast<std::size_t>(j)].score >= h.score - kNestedMarginPct)
+        return j;
+  }
+  return i;
+}
+
 // A pair "effect + drift" whose drift alone is immaterial is reported as the effect alone
 // when that single scores min_gain too: the augmented model should not carry the set's
 // normal wander as a change.
 int choose(const DiagnoseResult& r, double min_gain) {
   int i = choose_raw(r, min_gain);
   if (i < 0) return i;
-  // An effect that contains a simpler one must beat it by a margin (thresholds.hpp).
-  if (const auto& h = r.hypotheses[static_cast<std::size_t>(i)]; h.effects.size() == 1) {
-    if (const auto simpler = effect_model(h.effects[0].effect).generalises) {
-      for (std::size_t j = 0; j < r.hypotheses.size(); ++j) {
-        const auto& g = r.hypotheses[j];
-        if (g.effects.size() == 1 && g.effects[0].effect == *simpler) {
-          if (g.score >= h.score - kNestedMarginPct) i = static_cast<int>(j);
-          break;  // ranked: the simpler effect's best place
-        }
-      }
-    }
+  i = prefer_simpler(r, i, min_gain);
+  // A play evidenced beyond a lag: the best play or hysteresis loop within the margin of the
+  // choice is the verdict (thresholds.hpp).
+  const bool play_evidenced = play_beyond_lag(r.location);
+  if (play_evidenced && !has_direction_effect(r.hypotheses[static_cast<std::size_t>(i)])) {
+    const int j = choose_raw(r, min_gain, Only::kDirection);
+    if (j >= 0 && r.hypotheses[static_cast<std::size_t>(j)].score >=
+                      r.hypotheses[static_cast<std::size_t>(i)].score - kNonlinearOverLinearPct)
+      i = j;
   }
-  // A nonlinearity must beat the best linear explanation by a margin (thresholds.hpp).
-  if (has_nonlinearity(r.hypotheses[static_cast<std::size_t>(i)])) {
-    const int j = choose_raw(r, min_gain, true);
+  // A nonlinearity must beat the best linear explanation by a margin (thresholds.hpp),
+  // unless it is a play the data show beyond a lag.
+  if (const auto& h = r.hypotheses[static_cast<std::size_t>(i)];
+      has_nonlinearity(h) && !(play_evidenced && has_direction_effect(h))) {
+    const int j = choose_raw(r, min_gain, Only::kLinear);
     if (j >= 0 && r.hypotheses[static_cast<std::size_t>(j)].score >=
                       r.hypotheses[static_cast<std::size_t>(i)].score - kNonlinearOverLinearPct)
       i = j;

@@ -6,6 +6,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 
@@ -252,6 +253,68 @@ TEST(Verdict, ALineBehindAWanderIsFittedBesideIt) {
   ASSERT_EQ(r.chosen()->effects.size(), 2u) << r.explanation;
   EXPECT_EQ(r.chosen()->effects[1].effect, Effect::kDrift);
   EXPECT_NEAR(r.chosen()->effects[0].params[0], 7.3, 0.05) << r.explanation;
+}
+
+// A hand-ranked result on the nominal model, the input tests failed (so that the best
+// hypothesis above the gain is the choice).
+DiagnoseResult ranked(std::vector<std::pair<std::vector<AppliedEffect>, double>> hs) {
+  DiagnoseResult r;
+  r.problem.tf = nominal_genset_model();
+  r.location.input_mismatch = true;
+  for (auto& [effects, score] : hs) {
+    HypothesisFit h;
+    h.effects = std::move(effects);
+    h.score = score;
+    h.validation_fit_after = score;  // a drift alone: material by its gain
+    r.hypotheses.push_back(std::move(h));
+  }
+  return r;
+}
+
+// A resonance whose zeros cancel a mode of the model and whose poles only re-damp it is the
+// damping change it describes (thresholds.hpp kDampingOverStiffness; droopsim's damper
+// windings were named `resonance`); one that moves the mode's frequency as a stiffness
+// change does stays a resonance.
+TEST(Verdict, AResonanceThatOnlyReDampsTheModelsModeIsADampingChange) {
+  const auto mode = dominant_mode(nominal_genset_model());
+  ASSERT_TRUE(mode);
+  const double f0 = mode->first, z0 = mode->second;
+  const AppliedEffect drift{Effect::kDrift, {5.0}};
+  // freq_hz, zeta, peak_ratio, hf_gain: poles (f0, 0.6 z0), zeros (f0, z0).
+  const AppliedEffect redamped{Effect::kResonance, {f0, 0.6 * z0, 1.0 / 0.6, 1.0}};
+  const DiagnoseResult damped = ranked({{{redamped, drift}, 10.0},
+                                        {{{Effect::kLoadDamping, {0.6 * z0}}, drift}, 8.0},
+                                        {{drift}, 5.0}});
+  EXPECT_EQ(verdict_of(damped.hypotheses[static_cast<std::size_t>(choose(damped, 0.2))]),
+            "load_damping");
+  // A softer spring: poles at 0.8 f0 with the damping ratio up by 1/0.8 (zeros on the mode).
+  const double s = 0.8;
+  const AppliedEffect softer{Effect::kResonance, {s * f0, z0 / s, s * s, s * s}};
+  const DiagnoseResult stiffness = ranked({{{softer, drift}, 10.0},
+                                           {{{Effect::kLoadDamping, {0.6 * z0}}, drift}, 8.0},
+                                           {{drift}, 5.0}});
+  EXPECT_EQ(verdict_of(stiffness.hypotheses[static_cast<std::size_t>(choose(stiffness, 0.2))]),
+            "resonance");
+}
+
+// A play's direction effect beyond what a lag adds (thresholds.hpp kDirectionBeyondLagZ)
+// lets a play within the nonlinear margin of a lag be the verdict; without it the lag is.
+TEST(Verdict, APlayShownBeyondALagIsNamedOverTheLag) {
+  const auto choice = [](double beyond_lag_z, double lag, double play) {
+    std::vector<std::pair<std::vector<AppliedEffect>, double>> hs{
+        {{{Effect::kExtraLag, {0.05}}}, lag}, {{{Effect::kBacklash, {0.1}}}, play}};
+    std::sort(hs.begin(), hs.end(),
+              [](const auto& a, const auto& b) { return a.second > b.second; });
+    DiagnoseResult r = ranked(hs);
+    r.location.amp.direction_z = -10.0;  // a direction effect (a lag shows one too)
+    r.location.amp.direction_beyond_lag_z = beyond_lag_z;
+    return verdict_of(r.hypotheses[static_cast<std::size_t>(choose(r, 0.2))]);
+  };
+  EXPECT_EQ(choice(-4.0, 10.0, 9.5), "backlash");    // within the margin, evidenced
+  EXPECT_EQ(choice(-1.0, 10.0, 9.5), "extra_lag");   // no evidence beyond the lag
+  EXPECT_EQ(choice(-4.0, 10.0, 10.3), "backlash");   // the margin waived
+  EXPECT_EQ(choice(-1.0, 10.0, 10.3), "extra_lag");  // the margin holds
+  EXPECT_EQ(choice(+4.0, 10.0, 9.5), "extra_lag");   // not a play's sign
 }
 
 }  // namespace
