@@ -16,7 +16,12 @@ judged against droopsim's own truth.
   * an injection delay inside that loop (d000): `dead_time` there, within 20 %;
   * a linkage play between actuator and rack behind the declared coupling (d039): `backlash`
     after the governor's PID with the loop's feedback fitted (`governor_pi`), its half-width
-    (bias-% equivalent at that place) within 20 % of the play over the rack's rms.
+    (bias-% equivalent at that place) within 20 % of the play over the rack's rms;
+  * a plain linkage play (d035), which a lag in the loop matched within the nonlinear
+    margin: `backlash`, shown beyond a lag by the direction test with the rate beside it
+    (`direction_beyond_lag_z` <= -2.5), its half-width within 20 %;
+  * softer damper windings (d055): `load_damping` (a resonance that only re-damps the swing
+    mode, named `resonance` before), its damping ratio within 20 %.
 """
 import json
 import os
@@ -94,6 +99,15 @@ class DroopsimCases(unittest.TestCase):
     def test_an_injection_delay_inside_the_speed_loop_is_a_dead_time_there(self):
         self.check_effect(*self.run_case("dead_time", "plain", 903395), ("dead_time",),
                           "extra_delay_s", place="governor_loop")
+
+    def test_a_plain_play_shown_beyond_a_lag_is_a_backlash(self):
+        truths, rep = self.run_case("backlash", "plain", 913125)
+        self.assertLessEqual(rep["location"]["amplitude"]["direction_beyond_lag_z"], -2.5)
+        self.check_effect(truths, rep, ("backlash",), "half_width")
+
+    def test_softer_damper_windings_are_a_damping_change(self):
+        self.check_effect(*self.run_case("load_damping", "plain", 70952), ("load_damping",),
+                          "zeta")
 
 
 if __name__ == "__main__":
