@@ -304,6 +304,26 @@ Problem spanned(const Problem& pr, const HypothesisFit& h) {
 
 namespace {
 
+// An effect found from an onset (onset.cpp) beside each detected disturbance, on the same
+// span, from both singles' fits: its pair with the disturbance over the whole record is the
+// effect diluted by the part without it (a transducer's gain change from half-way behind the
+// grid's wander, droopsim seed 2 d017, was named `drift`).
+std::vector<HypothesisFit> gated_with_disturbances(const Problem& pr,
+                                                   const std::vector<HypothesisFit>& singles,
+                                                   const Eigen::VectorXd& base,
+                                                   const DiagnoseOptions& o) {
+  std::vector<HypothesisFit> out;
+  for (const auto& h : singles) {
+    if (h.effects.size() != 1 || !has_input_side(h) || !gated(pr, h)) continue;
+    std::vector<Candidate> cands;
+    for (const auto& d : singles)
+      if (d.effects.size() == 1 && !has_input_side(d))
+        cands.push_back({{h.effects[0], d.effects[0]}});
+    for (auto& g : fit_all(spanned(pr, h), cands, base, o)) out.push_back(std::move(g));
+  }
+  return out;
+}
+
 // Every applicable single (the input-side ones also when `blind`) screened and the best
 // searched in full, onsets, the sensor-lag twin; ranked.
 std::vector<HypothesisFit> search_singles(const Problem& pr, const Location& loc,
@@ -354,6 +374,7 @@ std::vector<HypothesisFit> search_hypotheses(const Problem& pr, const Location& 
   for (auto& h :
        screen_and_refine(pr, places_with_dominant(pr, hs, tried), base, o, kRefinedDominantPlaces))
     pairs.push_back(std::move(h));
+  for (auto& h : gated_with_disturbances(pr, hs, base, o)) pairs.push_back(std::move(h));
   return done(std::move(pairs));
 }
 

@@ -222,10 +222,30 @@ int prefer_simpler(const DiagnoseResult& r, int i, double min_gain) {
   return i;
 }
 
+// A level step that the gain change of the dynamics after it matches (locate_step_gain: the
+// two measure the same change of the measurement's gain, docs/diagnose.md) is a gain change
+// from the step: its best credible hypothesis scoring min_gain is the verdict, whatever a
+// disturbance beside it scores alone (the step, taken out of the record, carried most of
+// its evidence).
+int step_gain_choice(const DiagnoseResult& r, double min_gain) {
+  if (!r.location.step_gain.fires) return -1;
+  for (std::size_t i = 0; i < r.hypotheses.size(); ++i) {  // ranked
+    const auto& h = r.hypotheses[i];
+    if (h.score < min_gain) break;
+    const bool gain_only =
+        has_input_side(h) && std::all_of(h.effects.begin(), h.effects.end(), [](const auto& e) {
+          return e.effect == Effect::kGainChange || kind_of(e.effect) == EffectKind::kDisturbance;
+        });
+    if (gain_only && credible(h, r.problem.scales)) return static_cast<int>(i);
+  }
+  return -1;
+}
+
 // A pair "effect + drift" whose drift alone is immaterial is reported as the effect alone
 // when that single scores min_gain too: the augmented model should not carry the set's
 // normal wander as a change.
 int choose(const DiagnoseResult& r, double min_gain) {
+  if (const int j = step_gain_choice(r, min_gain); j >= 0) return j;
   int i = choose_raw(r, min_gain);
   if (i < 0) return i;
   i = prefer_simpler(r, i, min_gain);

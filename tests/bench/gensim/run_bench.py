@@ -41,6 +41,9 @@ def norm(name):
     return fx.lag_class(name)
 
 
+DISTURBANCE_WORDS = ("drift", "periodic_disturbance")
+
+
 def is_right(truth_effect, verdict, concealment, named=()):
     """named: the chosen hypothesis's effects (a pair's verdict names its input-side effect
     only, "the disturbance listed with it"): a pair is scored on them, a single on the verdict
@@ -49,8 +52,8 @@ def is_right(truth_effect, verdict, concealment, named=()):
         return verdict == "none"
     want = {norm(e) for e in truth_effect.split("+")}
     got = {norm(e) for e in verdict.split("+")}
-    if len(want) > 1 and verdict in named:
-        got = {norm(e) for e in named}
+    if len(want) > 1 and verdict in named:   # a disturbance listed beside a pair, as a single's
+        got = {norm(e) for e in named if norm(e) in want or e not in DISTURBANCE_WORDS}
     if concealment == "drift" and "drift" not in want:
         got.discard("drift")
     if "hysteresis" in want and "backlash" in got:

@@ -21,7 +21,10 @@ judged against droopsim's own truth.
     margin: `backlash`, shown beyond a lag by the direction test with the rate beside it
     (`direction_beyond_lag_z` <= -2.5), its half-width within 20 %;
   * softer damper windings (d055): `load_damping` (a resonance that only re-damps the swing
-    mode, named `resonance` before), its damping ratio within 20 %.
+    mode, named `resonance` before), its damping ratio within 20 %;
+  * a transducer's gain change from 100 s behind the grid's wander (benchmark seed 2 d017,
+    named `drift` before): `gain_change` from the level step on, the change (1 - ratio)
+    within 20 %.
 """
 import json
 import os
@@ -108,6 +111,18 @@ class DroopsimCases(unittest.TestCase):
     def test_softer_damper_windings_are_a_damping_change(self):
         self.check_effect(*self.run_case("load_damping", "plain", 70952), ("load_damping",),
                           "zeta")
+
+    def test_a_gain_change_from_half_way_is_one_from_the_step(self):
+        truths, rep = self.run_case("gain_change", "late", 840349)
+        self.assertEqual(rep["verdict"], "gain_change", rep["explanation"])
+        self.assertTrue(rep["location"]["level_shift"]["step_gain"]["fires"])
+        h = rep["hypotheses"][rep["chosen"]]
+        got = next(e for e in h["effects"] if e["effect"] == "gain_change")["params"]["gain_ratio"]
+        truth = truths[0]["truth"]
+        print(f"  gain_ratio {got:.4f} against {truth:.4f} from {h['active_span_s'][0]:.1f} s",
+              flush=True)
+        self.assertLess(abs(got - truth), PARAM_TOL * abs(1.0 - truth), rep["explanation"])
+        self.assertAlmostEqual(h["active_span_s"][0], 100.0, delta=5.0)
 
 
 if __name__ == "__main__":

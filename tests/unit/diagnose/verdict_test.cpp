@@ -237,6 +237,33 @@ TEST(Verdict, ADriftFromHalfWayIsJudgedWhereItIs) {
   EXPECT_EQ(choose(r, thresholds::kMinGainPct), -1);
 }
 
+// A level step that the gain change of the dynamics after it matches is a gain change from
+// the step, though its pair with the grid's wander scores under the wander alone (droopsim
+// seed 2 d017: a transducer's gain 0.907 from 100 s, the step taken out of the record; the
+// pair from the step finds 0.898, 0.23 points under the drift alone, and was named `drift`).
+TEST(Verdict, ALevelStepThatTheDynamicsGainMatchesIsAGainChange) {
+  DiagnoseResult r;
+  r.problem.y = white(1000, 10.0, 23);
+  r.problem.scales.z_std = 10.0;
+  r.location.input_mismatch = true;
+  const auto hypothesis = [](std::vector<AppliedEffect> effects, double score) {
+    HypothesisFit h;
+    h.effects = std::move(effects);
+    h.score = score;
+    h.validation_fit_before = 60.0;
+    h.validation_fit_after = 60.0 + score;
+    return h;
+  };
+  const AppliedEffect drift{Effect::kDrift, {5.0}, Place::kInput, {}};
+  r.hypotheses = {hypothesis({drift}, 13.08),
+                  hypothesis({{Effect::kGainChange, {0.898}, Place::kInput, {}}, drift}, 12.85)};
+  r.hypotheses[0].derived = {{"drift_rms", 50.0}, {"drift_rms_worst_half", 50.0}};
+  EXPECT_EQ(choose(r, thresholds::kMinGainPct), 0);
+  r.location.step_gain.tested = true;
+  r.location.step_gain.fires = true;
+  EXPECT_EQ(choose(r, thresholds::kMinGainPct), 1);
+}
+
 // A line behind a larger wander is fitted beside it: a torque ripple behind the grid's
 // wander (gensim seed 3 g062) was named `drift`, the line's single fitted without the drift.
 TEST(Verdict, ALineBehindAWanderIsFittedBesideIt) {
@@ -315,6 +342,34 @@ TEST(Verdict, APlayShownBeyondALagIsNamedOverTheLag) {
   EXPECT_EQ(choice(-4.0, 10.0, 10.3), "backlash");   // the margin waived
   EXPECT_EQ(choice(-1.0, 10.0, 10.3), "extra_lag");  // the margin holds
   EXPECT_EQ(choice(+4.0, 10.0, 9.5), "extra_lag");   // not a play's sign
+}
+
+// A disturbance alone does not explain a residual whose amplitude tests fired: the pairs with
+// it are searched (droopsim seed 1 d037, a linkage play from half-way behind the grid's
+// wander: its residual, the drift taken out, passes the cross-correlation test, and the play
+// was named `drift`).
+TEST(Verdict, ADisturbanceAloneDoesNotExplainAnAmplitudeFinding) {
+  Problem pr;
+  Location loc;
+  loc.dist.drift = true;
+  HypothesisFit drift;
+  drift.effects = {AppliedEffect{Effect::kDrift, {5.0}, Place::kInput, {}}};
+  EXPECT_TRUE(explains(pr, drift, loc));
+  for (bool AmplitudeLocation::*test :
+       {&AmplitudeLocation::amplitude_dependent, &AmplitudeLocation::sign_dependent,
+        &AmplitudeLocation::direction_dependent}) {
+    Location found = loc;
+    found.amp.*test = true;
+    EXPECT_FALSE(explains(pr, drift, found));
+    found.amp.two_level_input = true;  // on a PRBS these tests detect a linear change as well
+    EXPECT_TRUE(explains(pr, drift, found));
+  }
+  Location found = loc;
+  found.amp.sign_dependent = true;
+  HypothesisFit pair = drift;
+  pair.effects.insert(pair.effects.begin(),
+                      AppliedEffect{Effect::kBacklash, {0.1}, Place::kInput, {}});
+  EXPECT_TRUE(explains(pr, pair, found));  // the input side is there to explain it
 }
 
 }  // namespace
