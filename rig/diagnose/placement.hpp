@@ -13,7 +13,8 @@
 //            as a governor's deadband: G taken as the closed loop of a unity-feedback loop
 //            that tracks the bias, L = G' / (1 - G'), G' = G / G0; then y = G0 L N(e) is
 //            the same as this form, which needs no L; for effects with a form there,
-//            EffectModel::apply_on_error: the memoryless nonlinearities, and a dead time
+//            EffectModel::apply_on_error: the memoryless nonlinearities (a limit as a plain
+//            clamp), and a dead time
 //            (N a delay: a transport delay inside the loop); rig/diagnose/error_loop.hpp)
 //   pi_loop  the same loop with N after the governor's PI: a = k C e, C = 1 + 1/(s T_i),
 //            y = G (u - C^-1 (a - N(a)) / k): a limit, a play or a hysteresis of the

@@ -41,7 +41,7 @@ bool recovery_credible(const AppliedEffect& e, std::size_t i, const DataScales& 
 
 std::string in_loop_words(const AppliedEffect& e, std::size_t i, const DataScales& s) {
   const auto& p = e.params;
-  if (p.size() <= i) return "";
+  if (p.size() <= i || on_error(e.place)) return "";  // a plain clamp there (the loop restores)
   if (after_pi(e.place)) {
     if (p[i] >= thresholds::kAtRecoveryBound * recovery_hi_s(s))
       return ", the governor's integrator held while the limit acts (anti-windup)";

@@ -1,5 +1,6 @@
 // saturation: limits on the input about the operating point, plain (recovery_s = dt) or
-// inside an integrating loop that restores the lost position with recovery_s (blocks.hpp).
+// inside an integrating loop that restores the lost position with recovery_s (blocks.hpp);
+// on the governor's error a plain clamp (the loop restores the position there).
 // Plant: gov.tmax_pu = rack0 + (u0 + upper) a_r, gov.tmin_pu = rack0 + (u0 - lower) a_r,
 // rack0 = the steady rack (P0/P_r)/c at zero bias, u0 the recording's mean bias (a_r and c
 // from common.hpp); a limit outside the recorded excursion is not identified: unchanged.
@@ -33,6 +34,13 @@ std::vector<Params> seeds(const Problem& pr, const Location&) {
 
 Eigen::VectorXd apply(const Problem& pr, const Params& p, Eigen::VectorXd v) {
   return p.size() > 2 ? saturate_in_loop(v, -p[1], p[0], p[2], pr.dt_s) : saturate(v, -p[1], p[0]);
+}
+
+// On the governor's error (a limit after a governor whose action is mostly proportional, a
+// droop governor's: there a limit of its output is one of its error): a plain clamp, the
+// loop itself restores the position (recovery_s has no part there).
+double apply_on_error(const Params& p, std::span<const double> e, double, double) {
+  return std::clamp(e.back(), -p[1], std::max(-p[1], p[0]));
 }
 
 double step(const Params& p, StepState& s, double x, double, double dt_s) {
@@ -96,6 +104,7 @@ const EffectModel kSaturationEffect{
     .parameter_specs = specs,
     .seeds = seeds,
     .apply_input = apply,
+    .apply_on_error = apply_on_error,
     .step = step,
     .explain = meaning,
     .map_to_plant = to_plant,

@@ -22,6 +22,9 @@ judged against droopsim's own truth.
     (`direction_beyond_lag_z` <= -2.5), its half-width within 20 %;
   * softer damper windings (d055): `load_damping` (a resonance that only re-damps the swing
     mode, named `resonance` before), its damping ratio within 20 %;
+  * a smoke limiter just above the demand (d025): `saturation` on the governor's error with
+    the loop's feedback fitted (`governor_error`; named `static_nonlinearity` before the
+    limit was tried there), its upper limit within 20 %;
   * a transducer's gain change from 100 s behind the grid's wander (benchmark seed 2 d017,
     named `drift` before): `gain_change` from the level step on, the change (1 - ratio)
     within 20 %.
@@ -111,6 +114,10 @@ class DroopsimCases(unittest.TestCase):
     def test_softer_damper_windings_are_a_damping_change(self):
         self.check_effect(*self.run_case("load_damping", "plain", 70952), ("load_damping",),
                           "zeta")
+
+    def test_a_smoke_limiter_is_a_saturation_on_the_governors_error(self):
+        self.check_effect(*self.run_case("saturation", "plain", 765153), ("saturation",),
+                          "upper_limit", place="governor_error")
 
     def test_a_gain_change_from_half_way_is_one_from_the_step(self):
         truths, rep = self.run_case("gain_change", "late", 840349)

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstdint>
 #include <random>
+#include <span>
 
 #include "concealed.hpp"
 #include "records.hpp"
@@ -61,6 +62,19 @@ TEST(Placement, ADeadbandOnTheBiasIsAtTheInputAndTriedAtEachPlace) {
   EXPECT_EQ(places[static_cast<int>(Place::kGovernorError)], 1);
   EXPECT_EQ(places[static_cast<int>(Place::kGovernorPi)], 1);
   EXPECT_EQ(places[static_cast<int>(Place::kGovernorLoop)], 0);
+}
+
+// A limit is also tried on the governor's error (with a mostly proportional governor, a
+// droop governor's, a limit of its output is one of its error: droopsim's smoke limiter,
+// named `static_nonlinearity` there before): a plain clamp, the loop restoring the position.
+TEST(Placement, ALimitOnTheGovernorsErrorIsAPlainClamp) {
+  const auto on_error = effect_model(Effect::kSaturation).apply_on_error;
+  ASSERT_NE(on_error, nullptr);
+  const Params p{1.2, 3.0, 2.0};  // upper, lower magnitude, recovery_s (no part there)
+  const double e[] = {5.0, -7.0, 0.4};
+  EXPECT_DOUBLE_EQ(on_error(p, std::span<const double>(e, 1), 1.0, 0.01), 1.2);
+  EXPECT_DOUBLE_EQ(on_error(p, std::span<const double>(e, 2), 1.0, 0.01), -3.0);
+  EXPECT_DOUBLE_EQ(on_error(p, std::span<const double>(e, 3), 1.0, 0.01), 0.4);
 }
 
 // A place parameter stopped at its bound is the search's stand-in for another shape: an
