@@ -312,15 +312,23 @@ std::vector<HypothesisFit> gated_with_disturbances(const Problem& pr,
                                                    const std::vector<HypothesisFit>& singles,
                                                    const Eigen::VectorXd& base,
                                                    const DiagnoseOptions& o) {
-  std::vector<HypothesisFit> out;
+  // By span (the onset re-search gates every input-side single at one): screened, the best
+  // few searched in full, as the forward pairs are.
+  std::vector<std::pair<const HypothesisFit*, std::vector<Candidate>>> spans;
   for (const auto& h : singles) {
     if (h.effects.size() != 1 || !has_input_side(h) || !gated(pr, h)) continue;
-    std::vector<Candidate> cands;
+    auto at = std::find_if(spans.begin(), spans.end(), [&](const auto& sp) {
+      return sp.first->active_from == h.active_from && sp.first->active_to == h.active_to;
+    });
+    if (at == spans.end()) at = spans.insert(spans.end(), {&h, {}});
     for (const auto& d : singles)
       if (d.effects.size() == 1 && !has_input_side(d))
-        cands.push_back({{h.effects[0], d.effects[0]}});
-    for (auto& g : fit_all(spanned(pr, h), cands, base, o)) out.push_back(std::move(g));
+        at->second.push_back({{h.effects[0], d.effects[0]}});
   }
+  std::vector<HypothesisFit> out;
+  for (const auto& [h, cands] : spans)
+    for (auto& g : screen_and_refine(spanned(pr, *h), cands, base, o, kRefinedForwardPairs))
+      out.push_back(std::move(g));
   return out;
 }
 
