@@ -80,10 +80,11 @@ bool immaterial_drift(const HypothesisFit& h, const Problem& pr) {
   return rms < kDriftMaterialFraction * pr.scales.z_std;
 }
 
-// A dead time of at most half a sample alone is the sampling convention (timing.hpp).
+// A dead time of at most half a sample alone, on the output's timing, is the sampling
+// convention (timing.hpp); inside a loop it changes the dynamics.
 bool sampling_convention_only(const HypothesisFit& h, const Problem& pr) {
   return h.effects.size() == 1 && h.effects[0].effect == Effect::kDeadTime &&
-         std::abs(h.effects[0].params[0]) <= 0.5 * pr.dt_s;
+         h.effects[0].place == Place::kInput && std::abs(h.effects[0].params[0]) <= 0.5 * pr.dt_s;
 }
 
 // The best hypothesis above min_gain; when the input tests failed, one with an input-side

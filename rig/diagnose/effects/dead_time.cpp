@@ -78,9 +78,11 @@ void to_plant(const PlantContext& c, PlantTarget& m) {
         fmt::format("fuel dead time {:.4g} s + extra_delay_s {:.4g} s", td0, p[0]));
 }
 
-// Inside the loop a delay is positive (the approximant of a negative one is no delay).
-bool credible(const AppliedEffect& e, const DataScales& s) {
-  return e.place != Place::kGovernorLoop || e.params[0] > 0.5 * s.dt_s;
+// Inside the loop a delay is positive (the approximant of a negative one is no delay). It
+// may be shorter than a sample: unlike a shift of the output (the sampling convention,
+// timing.hpp) it changes the loop's dynamics, which the record resolves.
+bool credible(const AppliedEffect& e, const DataScales&) {
+  return e.place != Place::kGovernorLoop || e.params[0] > 0.0;
 }
 
 }  // namespace
