@@ -2,6 +2,7 @@
 // that answer from it.
 #include "rig/diagnose/effect_registry.hpp"
 
+#include <algorithm>
 #include <array>
 #include <cstddef>
 #include <stdexcept>
@@ -61,6 +62,12 @@ std::optional<Effect> effect_from_string(std::string_view word) {
 }
 
 EffectKind kind_of(Effect effect) { return effect_model(effect).kind; }
+
+std::size_t acting_params(const AppliedEffect& e) {
+  const int n = effect_model(e.effect).params_on_error;
+  if (!on_error(e.place) || n < 0) return e.params.size();
+  return std::min(e.params.size(), static_cast<std::size_t>(n));
+}
 
 std::vector<ParamSpec> parameter_specs(Effect effect, const DataScales& scales) {
   return effect_model(effect).parameter_specs(scales);

@@ -86,6 +86,9 @@ struct EffectModel {
   // deviation of the error (as apply_input measures its signal), dt_s its sample period.
   double (*apply_on_error)(const Params& p, std::span<const double> e, double sigma,
                            double dt_s) = nullptr;
+  // How many of its leading parameters act there (-1: all); the others (a limiter's
+  // recovery_s, which the loop itself does on the error) are neither counted nor reported.
+  int params_on_error = -1;
   // Its form stepped one sample at a time (the same map as apply_input, its state in s),
   // when it has one: then it is also tried after the governor's PI, inside its loop
   // (Place::kPiLoop). sigma: the standard deviation of its input, dt_s its sample period.
@@ -128,6 +131,8 @@ struct EffectModel {
 
 // Throws std::out_of_range for a value outside the enum.
 const EffectModel& effect_model(Effect effect);
+// How many of e's parameters act at its place (EffectModel::params_on_error).
+std::size_t acting_params(const AppliedEffect& e);
 // nullptr for an unknown word.
 const EffectModel* effect_model(std::string_view name);
 // In the order of kAllEffects.

@@ -96,7 +96,7 @@ std::string HypothesisFit::name() const {
 int HypothesisFit::parameter_count() const {
   int n = 0;
   for (const auto& e : effects) {
-    n += static_cast<int>(e.params.size() + e.place_params.size());
+    n += static_cast<int>(acting_params(e) + e.place_params.size());
     n += effect_model(e.effect).regressor_columns;  // e.g. amplitude and phase by LS
   }
   return n;

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "rig/diagnose/effect_registry.hpp"
 #include "rig/diagnose/report_out.hpp"
 #include "rig/fra/h1.hpp"
 #include "rig/report/bode_chart.hpp"
@@ -176,7 +177,7 @@ report::Table hypotheses_table(const DiagnoseResult& r) {
     std::string params;
     for (const auto& e : h.effects) {
       const auto specs = parameter_specs(e.effect, r.problem.scales);
-      for (std::size_t j = 0; j < e.params.size(); ++j)
+      for (std::size_t j = 0; j < acting_params(e); ++j)
         params +=
             fmt::format("{}{}={:.4g}", params.empty() ? "" : ", ", specs[j].name, e.params[j]);
       const auto place = place_specs(e.place, r.problem.scales);

@@ -1,5 +1,6 @@
 #include <string>
 
+#include "rig/diagnose/effect_registry.hpp"
 #include "rig/diagnose/report_out.hpp"
 #include "rig/report/json_out.hpp"
 
@@ -14,7 +15,7 @@ json hypothesis_json(const HypothesisFit& h, const Problem& pr) {
   for (const auto& e : h.effects) {
     const auto specs = parameter_specs(e.effect, pr.scales);
     json p = json::object();
-    for (std::size_t i = 0; i < e.params.size(); ++i) {
+    for (std::size_t i = 0; i < acting_params(e); ++i) {
       p[specs[i].name] = number_or_null(e.params[i]);
       params[h.effects.size() > 1 ? std::string(to_string(e.effect)) + "." + specs[i].name
                                   : specs[i].name] = number_or_null(e.params[i]);
@@ -170,7 +171,7 @@ model::ModelFile augmented_model(const DiagnoseResult& r, const model::ModelFile
     for (const auto& e : h->effects) {
       const auto specs = parameter_specs(e.effect, r.problem.scales);
       json p = json::object();
-      for (std::size_t i = 0; i < e.params.size(); ++i) p[specs[i].name] = e.params[i];
+      for (std::size_t i = 0; i < acting_params(e); ++i) p[specs[i].name] = e.params[i];
       const auto place = place_specs(e.place, r.problem.scales);
       for (std::size_t i = 0; i < e.place_params.size(); ++i) p[place[i].name] = e.place_params[i];
       // On the governor's error even a linear effect (a dead time in the loop) stays out of

@@ -35,7 +35,8 @@ double recovery_hi_s(const DataScales& s) {
 }
 
 bool recovery_credible(const AppliedEffect& e, std::size_t i, const DataScales& s) {
-  if (after_pi(e.place)) return true;  // the PI's own integrator restores it there
+  // The PI's own integrator restores it after the PI; the loop itself on the error.
+  if (after_pi(e.place) || on_error(e.place)) return true;
   return e.params.size() <= i || e.params[i] < thresholds::kAtRecoveryBound * recovery_hi_s(s);
 }
 

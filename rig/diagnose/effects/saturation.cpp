@@ -105,6 +105,7 @@ const EffectModel kSaturationEffect{
     .seeds = seeds,
     .apply_input = apply,
     .apply_on_error = apply_on_error,
+    .params_on_error = 2,  // the limits; the loop restores the position there
     .step = step,
     .explain = meaning,
     .map_to_plant = to_plant,

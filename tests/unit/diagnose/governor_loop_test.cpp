@@ -180,10 +180,10 @@ TEST(GovernorLoop, ADelayShorterThanHalfASampleInTheLoopIsCredible) {
   const auto credible = effect_model(Effect::kDeadTime).credible;
   ASSERT_NE(credible, nullptr);
   const std::vector<double> loop{1.0, 0.07, 0.03};
-  EXPECT_TRUE(credible(AppliedEffect{Effect::kDeadTime, {0.0096}, Place::kGovernorLoop, loop},
-                       scales));
-  EXPECT_FALSE(credible(AppliedEffect{Effect::kDeadTime, {-0.004}, Place::kGovernorLoop, loop},
-                        scales));
+  EXPECT_TRUE(
+      credible(AppliedEffect{Effect::kDeadTime, {0.0096}, Place::kGovernorLoop, loop}, scales));
+  EXPECT_FALSE(
+      credible(AppliedEffect{Effect::kDeadTime, {-0.004}, Place::kGovernorLoop, loop}, scales));
 }
 
 }  // namespace

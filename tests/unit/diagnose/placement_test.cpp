@@ -75,6 +75,15 @@ TEST(Placement, ALimitOnTheGovernorsErrorIsAPlainClamp) {
   EXPECT_DOUBLE_EQ(on_error(p, std::span<const double>(e, 1), 1.0, 0.01), 1.2);
   EXPECT_DOUBLE_EQ(on_error(p, std::span<const double>(e, 2), 1.0, 0.01), -3.0);
   EXPECT_DOUBLE_EQ(on_error(p, std::span<const double>(e, 3), 1.0, 0.01), 0.4);
+  // There recovery_s is neither a parameter of the hypothesis nor reported; at the input it
+  // is both.
+  HypothesisFit h;
+  h.effects = {AppliedEffect{Effect::kSaturation, p, Place::kError, {}}};
+  EXPECT_EQ(acting_params(h.effects[0]), 2u);
+  EXPECT_EQ(h.parameter_count(), 2);
+  h.effects[0].place = Place::kInput;
+  EXPECT_EQ(acting_params(h.effects[0]), 3u);
+  EXPECT_EQ(h.parameter_count(), 3);
 }
 
 // A place parameter stopped at its bound is the search's stand-in for another shape: an
