@@ -125,6 +125,11 @@ struct Location {
 
 FrequencyLocation locate_frequency(const Problem& pr, const Eigen::VectorXd& residual);
 std::vector<TimeWindow> locate_time(const Problem& pr, const Eigen::VectorXd& residual);
+// The direction test of a play beyond any lag (AmplitudeLocation::direction_beyond_lag_z)
+// on the rows [from, to) only (to < 0: to the end): an effect from half-way is diluted in
+// the whole record's test.
+double direction_beyond_lag_z(const Problem& pr, const Eigen::VectorXd& residual,
+                              const Eigen::VectorXd& yhat, Eigen::Index from, Eigen::Index to);
 AmplitudeLocation locate_amplitude(const Problem& pr, const Eigen::VectorXd& residual,
                                    const Eigen::VectorXd& yhat);
 // The drift test's smoothing time scale (thresholds.hpp kDriftSmoothMinSamples,

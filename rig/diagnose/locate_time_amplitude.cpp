@@ -157,6 +157,9 @@ Eigen::VectorXd masked_response(const Problem& pr, const Eigen::VectorXd& u) {
   return detrend(pr, z);
 }
 
+// Fewer samples than this carry no amplitude or direction test.
+constexpr Eigen::Index kMinAmplitudeSamples = 64;
+
 // chi^2(4) at 1e-4: the level tests' bound (a false alarm in 10 000 records per test).
 constexpr double kLevelChi2Bound = 23.51;
 
@@ -221,6 +224,21 @@ Eigen::VectorXd rate_of(const Eigen::VectorXd& x, double dt_s) {
 
 }  // namespace
 
+double direction_beyond_lag_z(const Problem& pr, const Eigen::VectorXd& r_all,
+                              const Eigen::VectorXd& yh_all, Eigen::Index from, Eigen::Index to) {
+  const Eigen::Index n = r_all.size();
+  while (from < n && pr.est_weight(from) + pr.val_weight(from) <= 0.0) ++from;
+  const Eigen::Index m = (to < 0 ? n : std::min(to, n)) - from;
+  if (m < kMinAmplitudeSamples) return 0.0;
+  const Eigen::VectorXd r = detrend(pr, r_all).segment(from, m);
+  const Eigen::VectorXd yh = detrend(pr, yh_all).segment(from, m);
+  const double n_eff =
+      static_cast<double>(m) / bartlett_factor(r, yh, std::min<Eigen::Index>(200, m / 4));
+  const Eigen::VectorXd g_direction = masked_response(pr, direction_of(pr.u)).segment(from, m);
+  const Eigen::VectorXd g_rate = masked_response(pr, rate_of(pr.u, pr.dt_s)).segment(from, m);
+  return direction_fit(yh, g_direction, r, n_eff, &g_rate).z;
+}
+
 AmplitudeLocation locate_amplitude(const Problem& pr, const Eigen::VectorXd& r_all,
                                    const Eigen::VectorXd& yh_all) {
   AmplitudeLocation a;
@@ -228,7 +246,7 @@ AmplitudeLocation locate_amplitude(const Problem& pr, const Eigen::VectorXd& r_a
   Eigen::Index from = 0;
   while (from < n && pr.est_weight(from) + pr.val_weight(from) <= 0.0) ++from;
   const Eigen::Index m = n - from;
-  if (m < 64) return a;
+  if (m < kMinAmplitudeSamples) return a;
   const Eigen::VectorXd r = detrend(pr, r_all).tail(m), yh = detrend(pr, yh_all).tail(m);
   const double c = bartlett_factor(r, yh, std::min<Eigen::Index>(200, m / 4));
   std::vector<double> mags;

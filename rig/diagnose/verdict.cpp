@@ -103,8 +103,17 @@ bool has_direction_effect(const HypothesisFit& h) {
 
 // A play's direction effect beyond what any lag or delay adds (thresholds.hpp): the sign of
 // a play's (it subtracts b sign(du/dt) from the input it acts on).
-bool play_beyond_lag(const Location& loc) {
-  return !loc.amp.two_level_input && loc.amp.direction_beyond_lag_z <= -kDirectionBeyondLagZ;
+// On the whole record, or for a hypothesis gated to a span (an effect from an onset) on that
+// span alone: there the whole record's test dilutes it (droopsim seed 2 d037, a play from
+// 102 s: z -2.29 on the record).
+bool play_beyond_lag(const DiagnoseResult& r, const HypothesisFit& h) {
+  const Location& loc = r.location;
+  if (loc.amp.two_level_input) return false;
+  if (loc.amp.direction_beyond_lag_z <= -kDirectionBeyondLagZ) return true;
+  if (h.active_from <= 0 && h.active_to < 0) return false;
+  const Eigen::VectorXd residual = r.problem.y - r.baseline_yhat;
+  return direction_beyond_lag_z(r.problem, residual, r.baseline_yhat, h.active_from, h.active_to) <=
+         -kDirectionBeyondLagZ;
 }
 
 int choose_raw(const DiagnoseResult& r, double min_gain, Only only = Only::kAny) {
@@ -252,21 +261,19 @@ int choose(const DiagnoseResult& r, double min_gain) {
   i = prefer_simpler(r, i, min_gain);
   // A play evidenced beyond a lag: the best play or hysteresis loop within the margin of the
   // choice is the verdict (thresholds.hpp).
-  const bool play_evidenced = play_beyond_lag(r.location);
-  if (play_evidenced && !has_direction_effect(r.hypotheses[static_cast<std::size_t>(i)])) {
+  const auto at = [&r](int k) -> const HypothesisFit& {
+    return r.hypotheses[static_cast<std::size_t>(k)];
+  };
+  if (!has_direction_effect(at(i))) {
     const int j = choose_raw(r, min_gain, Only::kDirection);
-    if (j >= 0 && r.hypotheses[static_cast<std::size_t>(j)].score >=
-                      r.hypotheses[static_cast<std::size_t>(i)].score - kNonlinearOverLinearPct)
+    if (j >= 0 && play_beyond_lag(r, at(j)) && at(j).score >= at(i).score - kNonlinearOverLinearPct)
       i = j;
   }
   // A nonlinearity must beat the best linear explanation by a margin (thresholds.hpp),
   // unless it is a play the data show beyond a lag.
-  if (const auto& h = r.hypotheses[static_cast<std::size_t>(i)];
-      has_nonlinearity(h) && !(play_evidenced && has_direction_effect(h))) {
+  if (has_nonlinearity(at(i)) && !(has_direction_effect(at(i)) && play_beyond_lag(r, at(i)))) {
     const int j = choose_raw(r, min_gain, Only::kLinear);
-    if (j >= 0 && r.hypotheses[static_cast<std::size_t>(j)].score >=
-                      r.hypotheses[static_cast<std::size_t>(i)].score - kNonlinearOverLinearPct)
-      i = j;
+    if (j >= 0 && at(j).score >= at(i).score - kNonlinearOverLinearPct) i = j;
   }
   const auto& h = r.hypotheses[static_cast<std::size_t>(i)];
   if (h.effects.size() != 2 || h.effects[1].effect != Effect::kDrift) return i;
