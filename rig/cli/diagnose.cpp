@@ -1,5 +1,6 @@
 // rig diagnose --recording REC.csv --model MODEL.json --out DIR
-//              [--input COL --output COL | --columns I,J] [--dt S] [--no-pairs] [--json]
+//              [--input COL --output COL | --columns I,J] [--bus-frequency COL|none]
+//              [--dt S] [--no-pairs] [--json]
 // Why a model and a recording disagree (DESIGN.md sections 4 and 9). Writes report.json,
 // report.html and augmented_model.json. Exit 0 when the diagnosis ran (whatever the
 // verdict), 2 for bad input (one line naming the file/field and what was expected).
@@ -16,6 +17,7 @@
 #include <cctype>
 #include <cmath>
 #include <filesystem>
+#include <fstream>
 #include <memory>
 #include <optional>
 #include <string>
@@ -39,6 +41,7 @@ namespace {
 struct DiagnoseArgs {
   std::filesystem::path recording, model, out;
   std::string input, output, columns;
+  std::string bus_frequency;  // a column, "none", or empty: freq_hz when the header has it
   std::optional<double> dt_s;
   bool no_pairs = false, json = false, no_plant_check = false, force = false;
 };
@@ -47,7 +50,34 @@ struct DiagnoseArgs {
   throw io::InputError(file, 0, field, what);
 }
 
-io::Recording load(const DiagnoseArgs& a, std::string& in, std::string& out) {
+// Whether the recording's header row names `column` (a headerless file names none).
+bool header_has(const std::filesystem::path& path, const std::string& column) {
+  std::ifstream f(path);
+  std::string line;
+  if (!std::getline(f, line)) return false;
+  std::string name;
+  for (std::size_t i = 0; i <= line.size(); ++i) {
+    const char c = i < line.size() ? line[i] : ',';
+    if (c == ',' || c == ';' || c == '\t' || c == '\r') {
+      if (name == column) return true;
+      name.clear();
+    } else if (c != '"' && c != ' ') {
+      name += c;
+    }
+  }
+  return false;
+}
+
+// The bus frequency's column (DESIGN.md 5): --bus-frequency COL, or freq_hz when the
+// recording has it; "none" or nothing.
+std::string bus_frequency_column(const DiagnoseArgs& a) {
+  if (a.bus_frequency == "none") return "";
+  if (!a.bus_frequency.empty()) return a.bus_frequency;
+  return header_has(a.recording, "freq_hz") ? "freq_hz" : "";
+}
+
+io::Recording load(const DiagnoseArgs& a, std::string& in, std::string& out,
+                   const std::string& bus) {
   io::ReadOptions ro;
   ro.dt_s = a.dt_s;
   in = a.input, out = a.output;
@@ -60,6 +90,7 @@ io::Recording load(const DiagnoseArgs& a, std::string& in, std::string& out) {
     bad("rig diagnose", "--input/--output", "give both columns, or neither");
   if (in.empty()) in = "u", out = "y";
   ro.columns = {in, out};
+  if (!bus.empty()) ro.columns.push_back(bus);
   io::Recording rec = io::read_recording(a.recording, ro);
   in = rec.names[0], out = rec.names[1];
   if (!rec.sampling.uniform)
@@ -134,7 +165,8 @@ int run_diagnose(const DiagnoseArgs& a) {
   const bool plant_toml = a.model.extension().string() == ".toml";
   io::prepare_out_dir(a.out, a.force);
   std::string in, out;
-  const io::Recording rec = load(a, in, out);
+  const std::string bus = bus_frequency_column(a);
+  const io::Recording rec = load(a, in, out, bus);
   std::optional<TempDir> tmp;
   std::optional<PlantModel> plant;
   if (plant_toml) {
@@ -159,6 +191,7 @@ int run_diagnose(const DiagnoseArgs& a) {
   const double plant_rc = plant ? plant->param("meas.ac_rc_s") : 0.0;
   diagnose::DiagnoseInput di{model.tf, rec.column(in), rec.column(out), rec.dt_s,
                              plant_rc > 0.0 ? std::optional(plant_rc) : chain_rc};
+  if (!bus.empty()) di.bus_freq_hz = rec.column(bus);
   diagnose::DiagnoseOptions opt;
   opt.try_pairs = !a.no_pairs;
   diagnose::DiagnoseResult r;
@@ -220,6 +253,10 @@ void add_diagnose_command(CLI::App& app) {
   cmd->add_option("--columns", a->columns, "Input and output columns by 1-based index: I,J")
       ->excludes(cmd->get_option("--input"))
       ->excludes(cmd->get_option("--output"));
+  cmd->add_option("--bus-frequency", a->bus_frequency,
+                  "Bus frequency column (Hz): the grid's share of the output is taken out "
+                  "first when the bias does not move it (default freq_hz when the recording "
+                  "has it; none: do not use one)");
   cmd->add_option("--dt", a->dt_s, "Sample period in s (overrides the time column and sidecar)");
   cmd->add_option("--out", a->out, "Output folder (must be new or empty, see --force)")->required();
   cmd->add_flag("--force", a->force,

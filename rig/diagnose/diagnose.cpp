@@ -4,6 +4,7 @@
 #include <cmath>
 #include <optional>
 
+#include "rig/diagnose/bus_frequency.hpp"
 #include "rig/diagnose/search.hpp"
 #include "rig/diagnose/split.hpp"
 #include "rig/diagnose/timing.hpp"
@@ -79,7 +80,9 @@ const HypothesisFit* DiagnoseResult::chosen() const {
 DiagnoseResult diagnose(const DiagnoseInput& in, const DiagnoseOptions& o) {
   const auto t0 = std::chrono::steady_clock::now();
   DiagnoseResult r;
-  r.problem = prepare_problem(in, &r.blocks, &r.warmup);
+  DiagnoseInput input = in;
+  if (in.bus_freq_hz) r.bus_frequency = take_out_bus_frequency(input, *in.bus_freq_hz);
+  r.problem = prepare_problem(input, &r.blocks, &r.warmup);
   Problem& pr = r.problem;
   // The sampling convention (timing.hpp): when the baseline shifted by at most half a sample
   // explains the recording (without an operating-point step: that is a change of its own),

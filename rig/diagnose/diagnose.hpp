@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "rig/diagnose/augmented_model.hpp"
+#include "rig/diagnose/bus_frequency.hpp"
 #include "rig/diagnose/hypothesis_fit.hpp"
 #include "rig/diagnose/locate.hpp"
 #include "rig/diagnose/thresholds.hpp"
@@ -27,7 +28,8 @@ struct DiagnoseInput {
   model::TransferFunction model;
   Eigen::VectorXd u, y;  // recorded input and output (any offset)
   double dt_s = 0.01;
-  std::optional<double> output_rc_s;  // the output went through this AC coupling
+  std::optional<double> output_rc_s;           // the output went through this AC coupling
+  std::optional<Eigen::VectorXd> bus_freq_hz;  // the recorded bus frequency (bus_frequency.hpp)
 };
 
 struct DiagnoseOptions {
@@ -45,8 +47,9 @@ struct DiagnoseResult {
   std::string explanation;
   Problem problem;  // the data as diagnosed (means removed, split)
   Eigen::VectorXd baseline_yhat;
-  std::optional<double> level_shift_time_s;  // an operating-point step (split.hpp), if any
-  double level_shift = 0.0;                  // its size, output units
+  std::optional<double> level_shift_time_s;        // an operating-point step (split.hpp), if any
+  double level_shift = 0.0;                        // its size, output units
+  std::optional<BusFrequencyShare> bus_frequency;  // when the recording carried one
   double timing_nuisance_s = 0.0;  // the dead time shift within +-dt/2 absorbed (timing.hpp)
   double fit_before_pct = 0.0;     // whole record after the warm-up
   double validation_fit_before_pct = 0.0;

@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <numbers>
 #include <string>
@@ -246,12 +247,22 @@ std::string alternative_words(const DiagnoseResult& r) {
   return s;
 }
 
+// What became of a recorded bus frequency (bus_frequency.hpp), first: every fit below is
+// of the output without the grid's share.
+std::string bus_frequency_words(const DiagnoseResult& r) {
+  if (!r.bus_frequency) return "";
+  const std::string& n = r.bus_frequency->note;
+  return n.empty() ? ""
+                   : static_cast<char>(std::toupper(static_cast<unsigned char>(n[0]))) +
+                         n.substr(1) + ". ";
+}
+
 }  // namespace
 
 std::string explain(const DiagnoseResult& r) {
   const auto& t = r.location.tests;
   if (r.verdict == "none")
-    return level_shift_words(r) + clip_words(r) +
+    return bus_frequency_words(r) + level_shift_words(r) + clip_words(r) +
            fmt::format(
                "The model explains the recording within noise: fit {:.1f} % (validation {:.1f} %); "
                "the "
@@ -263,8 +274,8 @@ std::string explain(const DiagnoseResult& r) {
                "not depend on amplitude.",
                r.fit_before_pct, r.validation_fit_before_pct, t.cross_ratio, t.cross_threshold) +
            negligible_disturbance(r);
-  std::string s = level_shift_words(r) + clip_words(r) + where_in_frequency(r.location) +
-                  where_in_time_and_level(r);
+  std::string s = bus_frequency_words(r) + level_shift_words(r) + clip_words(r) +
+                  where_in_frequency(r.location) + where_in_time_and_level(r);
   if (!t.independent)
     s += fmt::format(
         "The residual is correlated with the input (peak {:.1f} times the 99 % bound at a lag "

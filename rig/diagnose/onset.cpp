@@ -97,9 +97,37 @@ Eigen::Index find_level_shift(const Problem& pr, const Eigen::VectorXd& r) {
   return best + w;
 }
 
+namespace {
+
+// A level step (find_level_shift) is also when a measurement gain with the operating level
+// in it changed: the gain change is fitted from the step on too, whatever it scored over
+// the whole record (where the half without it dilutes it below its parameter's worth) or
+// over the span the time windows located (droopsim seed 2 d017: with the grid's share taken
+// out, a change point at 66 s located a gain change from 100 s, and the gain fitted from it
+// read 0.948 against 0.907, 0.05 points over the fit from the step).
+void refit_gain_from_step(const Problem& pr, std::vector<HypothesisFit>& hs,
+                          const Eigen::VectorXd& base, const FitOptions& fit) {
+  const Eigen::Index step_at = std::max(pr.level_shift_at, pr.level_step_removed_at);
+  if (step_at <= 0) return;
+  const auto gain = std::find_if(hs.begin(), hs.end(), [](const HypothesisFit& h) {
+    return h.effects.size() == 1 && h.effects[0].effect == Effect::kGainChange;
+  });
+  if (gain == hs.end() || gain->yhat.size() != pr.y.size()) return;
+  Problem gated = pr;
+  gated.active_from = step_at;
+  gated.active_to = pr.y.size();
+  HypothesisFit g = fit_hypothesis(gated, {gain->effects}, base, fit);
+  if (g.score >= gain->score - thresholds::kStepOnsetMarginPct) *gain = std::move(g);
+}
+
+}  // namespace
+
 void refine_onsets(const Problem& pr, std::vector<HypothesisFit>& hs, const Eigen::VectorXd& base,
                    const FitOptions& fit) {
-  if (pr.active_from > 0 || pr.active_to < pr.y.size()) return;  // already located in time
+  if (pr.active_from > 0 || pr.active_to < pr.y.size()) {  // already located in time
+    refit_gain_from_step(pr, hs, base, fit);
+    return;
+  }
   int tried = 0;
   for (auto& h : hs) {
     if (tried >= kOnsetHypotheses) break;
@@ -115,20 +143,7 @@ void refine_onsets(const Problem& pr, std::vector<HypothesisFit>& hs, const Eige
     HypothesisFit g = fit_hypothesis(gated, {h.effects}, base, fit);
     if (g.score > h.score) h = std::move(g);
   }
-  // A level step (find_level_shift) is also when a measurement gain with the operating level
-  // in it changed: the gain change is fitted from the step on too, whatever it scored over
-  // the whole record (where the half without it dilutes it below its parameter's worth).
-  const Eigen::Index step_at = std::max(pr.level_shift_at, pr.level_step_removed_at);
-  if (step_at <= 0) return;
-  const auto gain = std::find_if(hs.begin(), hs.end(), [](const HypothesisFit& h) {
-    return h.effects.size() == 1 && h.effects[0].effect == Effect::kGainChange;
-  });
-  if (gain == hs.end() || gain->yhat.size() != pr.y.size()) return;
-  Problem gated = pr;
-  gated.active_from = step_at;
-  gated.active_to = pr.y.size();
-  HypothesisFit g = fit_hypothesis(gated, {gain->effects}, base, fit);
-  if (g.score > gain->score) *gain = std::move(g);
+  refit_gain_from_step(pr, hs, base, fit);
 }
 
 }  // namespace rig::diagnose

@@ -209,8 +209,18 @@ void write_report_html(const DiagnoseResult& r, const ReportContext& c,
   page.note(tone, "Verdict: " + r.verdict + where);
   page.paragraph(r.explanation);
   const auto& loc = r.location;
+  std::string grid = "not recorded";  // the bus frequency's share (bus_frequency.hpp)
+  if (r.bus_frequency)
+    grid = r.bus_frequency->used
+               ? fmt::format("{:.3g} rms taken out ({:.0f} % of the residual)",
+                             r.bus_frequency->share_rms, 100.0 * r.bus_frequency->residual_share)
+           : !(r.bus_frequency->frequency_rms_hz > 0.0) ? "constant"
+           : r.bus_frequency->bias_coherence > thresholds::kBusFrequencyMaxBiasCoherence
+               ? "not the grid's (follows the bias)"
+               : "not used (clipped output)";
   page.key_values(
-      {{"fit before (whole record after warm-up)", fmt::format("{:.1f} %", r.fit_before_pct)},
+      {{"grid's share (bus frequency)", grid},
+       {"fit before (whole record after warm-up)", fmt::format("{:.1f} %", r.fit_before_pct)},
        {"validation fit before", fmt::format("{:.1f} %", r.validation_fit_before_pct)},
        {"band", loc.freq.band_hz ? fmt::format("{:.3g} - {:.3g} Hz", loc.freq.band_hz->first,
                                                loc.freq.band_hz->second)

@@ -60,6 +60,18 @@ json level_shift_json(const DiagnoseResult& r) {
   return j;
 }
 
+// The recorded bus frequency and what became of it (bus_frequency.hpp); null without one.
+json bus_frequency_json(const DiagnoseResult& r) {
+  if (!r.bus_frequency) return nullptr;
+  const BusFrequencyShare& b = *r.bus_frequency;
+  return {{"used", b.used},
+          {"bias_coherence", b.bias_coherence},
+          {"frequency_rms_hz", b.frequency_rms_hz},
+          {"share_rms", b.share_rms},
+          {"residual_share", b.residual_share},
+          {"note", b.note}};
+}
+
 json location_json(const DiagnoseResult& r) {
   const Location& loc = r.location;
   json windows = json::array();
@@ -157,6 +169,7 @@ nlohmann::json report_json(const DiagnoseResult& r, const ReportContext& c) {
           {"warmup_s", static_cast<double>(r.warmup) * r.problem.dt_s},
           {"output_coupling_rc_s",
            r.problem.output_rc_s ? json(*r.problem.output_rc_s) : json(nullptr)},
+          {"bus_frequency", bus_frequency_json(r)},
           {"elapsed_s", r.elapsed_s},
           {"augmented_model", "augmented_model.json"}};
 }

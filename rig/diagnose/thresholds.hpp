@@ -210,6 +210,11 @@ inline constexpr double kOnsetQuietFraction = 0.25;
 inline constexpr int kOnsetHypotheses = 3;
 
 // --- Operating-point steps (onset.cpp find_level_shift) ---
+// A gain change fitted from a level step is kept over one from a change point of its own
+// scoring up to this much more: the step is independent evidence of when the gain changed,
+// while the change point was chosen on the data it is scored on (two parameters' penalty,
+// the span's two ends).
+inline constexpr double kStepOnsetMarginPct = 2 * kPenaltyPctPerParameter;
 // A step's |d_k| must exceed this many robust spreads of d (drift and noise move d smoothly
 // and everywhere, a step only near one k) ...
 inline constexpr double kLevelShiftSpreads = 10.0;
@@ -285,5 +290,25 @@ inline constexpr int kSpeedLoopSeed = 1;
 // A fitted share at this fraction of its bound or more stopped there (a stand-in for some
 // other shape, place_credible).
 inline constexpr double kLoopAtBound = 0.98;
+
+// --- The grid's share through a recorded bus frequency (bus_frequency.hpp) ---
+// The bus frequency is the grid's (a disturbance) only when its coherence with the bias,
+// averaged over the excited band (Welch, kBusFrequencySegments segments), stays below this: an
+// islanded set's frequency is its own power's answer to the bias, which a regression on it would
+// take from the model. Independent signals average 1/15 (~0.07) by chance; 0.3 is four times that
+// and leaves room for a weak grid the set moves a little.
+inline constexpr double kBusFrequencyMaxBiasCoherence = 0.3;
+// Segments of the coherence estimate, and the excited band: bins where the bias's spectrum
+// is at least this fraction of its peak.
+inline constexpr int kBusFrequencySegments = 15;
+inline constexpr double kBusFrequencyBandShare = 0.1;
+// The grid's share is fitted on the frequency and on it through first-order lags of these
+// time constants (the governor's, the engine's and the air path's answer to the droop) and
+// its rate of change (the rotor's inertia follows the grid's), lagged by the first.
+inline constexpr double kBusFrequencyLagsS[] = {0.2, 0.6, 2.0};
+// ... with coefficients fitted above this high-pass's corner (20 s: 0.008 Hz), where a
+// transducer's drift (tens of seconds) has little of its power and a grid's wander (seconds)
+// most of its own: slow regressors fitted to the whole band take a drift by chance.
+inline constexpr double kBusFrequencyHighPassS = 20.0;
 
 }  // namespace rig::diagnose::thresholds

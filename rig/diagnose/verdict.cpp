@@ -133,10 +133,12 @@ int choose_raw(const DiagnoseResult& r, double min_gain, Only only = Only::kAny)
     if (unseen && has_input_side(h) &&
         h.score - disturbance_part_score(r.hypotheses, h) < kUnseenInputGainPct)
       continue;
-    if (best_any < 0) best_any = static_cast<int>(i);
     if (!input) return static_cast<int>(i);
-    if (has_input_side(h) && h.score - disturbance_part_score(r.hypotheses, h) >= min_gain)
-      return static_cast<int>(i);
+    // A pair whose input-side half adds less than min_gain to its disturbance alone is that
+    // disturbance with an idle effect beside it: never named, not even as the fallback.
+    const bool adds = h.score - disturbance_part_score(r.hypotheses, h) >= min_gain;
+    if (has_input_side(h) && adds) return static_cast<int>(i);
+    if (best_any < 0 && !has_input_side(h)) best_any = static_cast<int>(i);
   }
   return best_any;
 }

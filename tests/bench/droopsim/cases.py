@@ -108,14 +108,20 @@ def model_doc():
     return _MODEL
 
 
-def write_case(case, y, out):
-    os.makedirs(out, exist_ok=True)
+def write_recording(case, y, freq_hz, out):
+    """recording.csv: t, u, y and the bus frequency as the rig records it (freq_hz)."""
     n = len(case["u"])
     t = np.arange(n) * pl.DT
-    np.savetxt(os.path.join(out, "recording.csv"), np.column_stack([t, case["u"], y]),
-               delimiter=",", header="t,u,y", comments="", fmt=["%.2f", "%.6f", "%.4f"])
+    np.savetxt(os.path.join(out, "recording.csv"), np.column_stack([t, case["u"], y, freq_hz]),
+               delimiter=",", header="t,u,y,freq_hz", comments="",
+               fmt=["%.2f", "%.6f", "%.4f", "%.3f"])
+
+
+def write_case(case, y, freq_hz, out):
+    os.makedirs(out, exist_ok=True)
+    write_recording(case, y, freq_hz, out)
     side = dict(sample_rate_hz=1.0 / pl.DT, y_sampled_after_s=0.0,
-                units=dict(t="s", u="% of rated power", y="kW"),
+                units=dict(t="s", u="% of rated power", y="kW", freq_hz="Hz"),
                 source=dict(simulator="droopsim", case=case["id"], seed=case["seed"]))
     if case["concealment"] == "coupled8":
         side.update(coupling_rc_s=COUPLING_RC_S, coupled_columns=["y"])

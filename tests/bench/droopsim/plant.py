@@ -30,6 +30,9 @@ from scipy import optimize, signal
 
 DT = 0.02            # row period, s (50 Hz)
 H_S = 0.002          # RK4 step
+F_GRID_HZ = 50.0     # the grid's nominal frequency
+FREQ_NOISE_HZ = 0.0005  # bus frequency measurement noise, rms
+FREQ_QUANT_HZ = 0.001   # bus frequency register resolution (DESIGN.md section 6, register 3)
 SUB = int(round(DT / H_S))
 BAND_HZ = 2.5        # bias: white Gaussian through a 2nd-order Butterworth at 2.5 Hz
 BIAS_RMS = 1.0       # % of rated power, clipped at 3 sigma
@@ -199,6 +202,27 @@ def grid_event(t, p):
     return p["step_hz"] * (1 - np.exp(-tt / 2.0)) * (0.4 + 0.6 * np.exp(-tt / 45.0))
 
 
+def _draws(n, ns, p, rng):
+    """The record's random parts in a fixed order (grid wander per RK4 step, A/D noise,
+    drift), the grid event, and the bus frequency as recorded: the grid's at each row's
+    start, with 0.5 mHz of measurement noise, quantised to the 1 mHz of the rig's register
+    (drawn last, so that y is as without it)."""
+    grid = _ou(n * SUB, _s(p["grid_tau_s"]), H_S, rng) / 50.0
+    noise = rng.standard_normal(n)
+    drift = _ou(n, _s(p["drift_tau_s"]), DT, rng)
+    gev = grid_event(np.arange(n * SUB) * H_S - ns * DT, p) / 50.0
+    pu = 1.0 + _s(p["grid_sd_hz"]) * grid[::SUB] + gev[::SUB]
+    f = F_GRID_HZ * pu + FREQ_NOISE_HZ * rng.standard_normal(n)
+    return grid, noise, drift, gev, np.round(f / FREQ_QUANT_HZ) * FREQ_QUANT_HZ
+
+
+def bus_frequency(n_rows, p, seed=0, settle_s=10.0):
+    """The recorded bus frequency (Hz) of simulate(u, p, seed) with len(u) == n_rows, without
+    simulating the set (the grid is stiff: the set does not move it)."""
+    ns = int(round(settle_s / DT))
+    return _draws(n_rows + ns, ns, p, np.random.default_rng(seed))[4][ns:]
+
+
 def _taps(steps, c):
     """History taps for a delay of `steps` RK steps read at stage offset c: (j, f) with the
     value (1 - f) h[i + j] + f h[i + j + 1] (h[i] the value at the step's start)."""
@@ -220,10 +244,7 @@ def simulate(u, p, seed=0, onset_s=None, p_after=None, deterministic=False, sett
     ns = int(round(settle_s / DT))
     n = len(u) + ns
     ub = np.concatenate([np.zeros(ns), np.asarray(u, float)])
-    grid = _ou(n * SUB, _s(p["grid_tau_s"]), H_S, rng) / 50.0
-    noise = rng.standard_normal(n)
-    drift = _ou(n, _s(p["drift_tau_s"]), DT, rng)
-    gev = grid_event(np.arange(n * SUB) * H_S - ns * DT, p) / 50.0
+    grid, noise, drift, gev, f_meas = _draws(n, ns, p, rng)
     x = steady_state(p, b)
     cols = np.arange(b)
     nd = int(math.ceil(0.5 / H_S))
@@ -308,7 +329,7 @@ def simulate(u, p, seed=0, onset_s=None, p_after=None, deterministic=False, sett
                 rack = hy
             hr[(i + 1) % nd] = rack
             hq[(i + 1) % nd] = x[IQ]
-    return dict(y=y[ns:], rack=rk[ns:], pe=pe[ns:])
+    return dict(y=y[ns:], rack=rk[ns:], pe=pe[ns:], freq_hz=f_meas[ns:])
 
 
 def excitation(n, seed, sigma=BIAS_RMS, band_hz=BAND_HZ, clip=3.0):

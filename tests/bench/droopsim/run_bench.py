@@ -18,6 +18,8 @@ import subprocess
 import sys
 import time
 
+import numpy as np
+
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, HERE)
 import cases as cs  # noqa: E402
@@ -40,26 +42,38 @@ def simulated_case(spec, d, reuse):
     if reuse and os.path.exists(cached):
         truth = json.load(open(os.path.join(d, "truth.json")))
         if truth.get("seed") == spec["seed"] and truth.get("effect") == spec["effect"]:
+            add_bus_frequency(spec, d)
             return dict(truths=truth["truths"]), json.load(open(cached)), 0.0
     case = cs.make_case(spec["id"], spec["effect"], spec["concealment"], spec["seed"])
     p, p_after, _ = oracle.plan(case)
     t0 = time.time()
     sim = pl.simulate(case["u"], p, seed=case["seed"], onset_s=case["onset_s"], p_after=p_after)
     orc = oracle.judge(case, sim["y"], cs.model_doc())
-    cs.write_case(case, sim["y"][:, 0], d)
+    cs.write_case(case, sim["y"][:, 0], sim["freq_hz"], d)
     with open(cached, "w") as f:
         json.dump(orc, f, default=float)
     return case, orc, time.time() - t0
 
 
-def run_case(spec, rig, work, reuse=False):
+def add_bus_frequency(spec, d):
+    """A recording written before the bus frequency was recorded gets its column (the same
+    draws: y is unchanged)."""
+    with open(os.path.join(d, "recording.csv")) as f:
+        if "freq_hz" in f.readline():
+            return
+    case = cs.make_case(spec["id"], spec["effect"], spec["concealment"], spec["seed"])
+    y = np.loadtxt(os.path.join(d, "recording.csv"), delimiter=",", skiprows=1)[:, 2]
+    cs.write_recording(case, y, pl.bus_frequency(len(y), case["p"], seed=case["seed"]), d)
+
+
+def run_case(spec, rig, work, reuse=False, bus_frequency=True):
     d = os.path.join(work, spec["id"])
     case, orc, sim_s = simulated_case(spec, d, reuse)
     t0 = time.time()
-    proc = subprocess.run(["nice", "-n", "10", rig, "diagnose", "--recording",
-                           os.path.join(d, "recording.csv"), "--model",
-                           os.path.join(d, "model.json"), "--out", os.path.join(d, "diag"),
-                           "--force"], capture_output=True, text=True)
+    cmd = ["nice", "-n", "10", rig, "diagnose", "--recording", os.path.join(d, "recording.csv"),
+           "--model", os.path.join(d, "model.json"), "--out", os.path.join(d, "diag"), "--force"]
+    proc = subprocess.run(cmd + ([] if bus_frequency else ["--bus-frequency", "none"]),
+                          capture_output=True, text=True)
     rig_s = time.time() - t0
     row = dict(spec, truths=case["truths"], oracle=orc, sim_s=round(sim_s, 1),
                rig_s=round(rig_s, 2), rc=proc.returncode,
@@ -113,6 +127,8 @@ def main():
     ap.add_argument("--json", help="per-case results (default OUT/results.json)")
     ap.add_argument("--reuse", action="store_true", help="reuse recordings and oracle verdicts")
     ap.add_argument("--rescore", help="tabulate an earlier results.json, run nothing")
+    ap.add_argument("--no-bus-frequency", action="store_true",
+                    help="tell the rig not to use the recorded bus frequency (freq_hz)")
     a = ap.parse_args()
     if a.rescore:
         doc = json.load(open(a.rescore))
@@ -126,13 +142,14 @@ def main():
         specs = [s for s in specs if a.only in s["effect"].split("+") or a.only == s["effect"]]
     chk = cs.model_doc()["source"]["check"]
     print(f"droopsim benchmark: seed {a.seed}, {len(specs)} cases of {cs.DURATION_S:.0f} s at "
-          f"{1 / pl.DT:.0f} Hz, rig {a.rig}; model order {chk['order']}, check "
+          f"{1 / pl.DT:.0f} Hz, rig {a.rig}"
+          f"{' told not to use the bus frequency' if a.no_bus_frequency else ''}; model order {chk['order']}, check "
           f"{chk['max_err_db']:.4f} dB {chk['max_err_deg']:.4f} deg; oracle: gain >= "
           f"{oracle.MIN_GAIN} points and F test p < {oracle.ALPHA}", flush=True)
     t_start = time.time()
     rows = []
     for spec in specs:
-        r = run_case(spec, a.rig, a.out, a.reuse)
+        r = run_case(spec, a.rig, a.out, a.reuse, not a.no_bus_frequency)
         o = r["oracle"]
         errs = " ".join(f"{k} {v:+.1f}%" for k, v in r.get("param_err_pct", {}).items())
         vb, va = r.get("vfit_before"), r.get("vfit_after")

@@ -86,6 +86,44 @@ TEST_F(DiagnoseCli, NullCaseIsNone) {
   EXPECT_EQ(nlohmann::json::parse(in)["verdict"], "none");
 }
 
+// A freq_hz column is read by default (a constant one: nothing taken out, said in
+// report.json); --bus-frequency none ignores it; a named column that is not there is a
+// one-line input error.
+TEST_F(DiagnoseCli, ReadsTheBusFrequencyColumn) {
+  const auto rec = make(std::nullopt);
+  {
+    std::ofstream csv(dir_ / "rec.csv");
+    csv << "t,u,y,freq_hz\n";
+    csv.precision(12);
+    for (Eigen::Index k = 0; k < rec.input.u.size(); ++k)
+      csv << static_cast<double>(k) * rec.input.dt_s << ',' << rec.input.u(k) << ','
+          << rec.input.y(k) << ",50.000\n";
+    rig::model::ModelFile m;
+    m.tf = rec.input.model;
+    rig::model::write_model(dir_ / "model.json", m);
+  }
+  const auto report = [&] {
+    std::ifstream in(dir_ / "out" / "report.json");
+    return nlohmann::json::parse(in);
+  };
+  ASSERT_EQ(run(std_args()), 0);
+  nlohmann::json j = report();
+  EXPECT_EQ(j["verdict"], "none");
+  ASSERT_TRUE(j["bus_frequency"].is_object());
+  EXPECT_FALSE(j["bus_frequency"]["used"].get<bool>());
+  EXPECT_EQ(j["bus_frequency"]["frequency_rms_hz"].get<double>(), 0.0);
+  auto args = std_args();
+  args.insert(args.end(), {"--bus-frequency", "none", "--force"});
+  ASSERT_EQ(run(args), 0);
+  EXPECT_TRUE(report()["bus_frequency"].is_null());
+  args = std_args();
+  args.insert(args.end(), {"--bus-frequency", "grid_hz", "--force"});
+  testing::internal::CaptureStderr();
+  EXPECT_EQ(run(args), 2);
+  const std::string err = testing::internal::GetCapturedStderr();
+  EXPECT_NE(err.find("grid_hz"), std::string::npos) << err;
+}
+
 TEST_F(DiagnoseCli, BadInputExitsTwo) {
   write_case(make(std::nullopt, 30.0), R"({"units": {"u": "%", "y": "MW"}})");
   EXPECT_EQ(run(std_args()), 2);  // output unit differs from the model's

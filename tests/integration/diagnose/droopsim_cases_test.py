@@ -9,7 +9,8 @@ judged against droopsim's own truth.
 
   * a slower power transducer (d010): `sensor_lag` (or its twin), its time constant within
     20 %, the fit improved;
-  * a null (d080): `none`;
+  * a null (d080): `none`; a null behind three times the grid's wander (d083): `none` with
+    the recorded bus frequency (its share taken out), not `none` when told not to use it;
   * a combustion lag inside the speed loop (d005): `extra_lag` inside the governor's loop
     (the `governor_loop` place, its feedback fitted; named `resonance`, a moved mode, before
     that place), its time constant within 20 %;
@@ -52,16 +53,17 @@ def rig() -> str:
     return os.path.join(os.environ.get("RIG_BIN_DIR", "build/bin"), "rig")
 
 
-def diagnose_case(effect, concealment, seed, work):
-    """Simulates the case into work/case, runs rig diagnose, returns (truths, report)."""
+def diagnose_case(effect, concealment, seed, work, extra=()):
+    """Simulates the case into work/case (with the bus frequency the rig records), runs rig
+    diagnose (with `extra` arguments), returns (truths, report)."""
     case = cs.make_case("test", effect, concealment, seed)
     sim = pl.simulate(case["u"], case["p"], seed=case["seed"], onset_s=case["onset_s"],
                       p_after=case["p_after"])
     d = os.path.join(work, "case")
-    cs.write_case(case, sim["y"][:, 0], d)
+    cs.write_case(case, sim["y"][:, 0], sim["freq_hz"], d)
     out = os.path.join(work, "diag")
     proc = subprocess.run([rig(), "diagnose", "--recording", os.path.join(d, "recording.csv"),
-                           "--model", os.path.join(d, "model.json"), "--out", out],
+                           "--model", os.path.join(d, "model.json"), "--out", out, *extra],
                           capture_output=True, text=True)
     if proc.returncode != 0:
         raise AssertionError(f"rig diagnose exit {proc.returncode}: {proc.stderr.strip()}")
@@ -70,10 +72,11 @@ def diagnose_case(effect, concealment, seed, work):
 
 
 class DroopsimCases(unittest.TestCase):
-    def run_case(self, *args):
+    def run_case(self, *args, extra=()):
         with tempfile.TemporaryDirectory() as work:
-            truths, rep = diagnose_case(*args, work)
-        print(f"{args[0]} {args[1]} seed {args[2]}: verdict {rep['verdict']}", flush=True)
+            truths, rep = diagnose_case(*args, work, extra)
+        print(f"{args[0]} {args[1]} seed {args[2]}{' ' + ' '.join(extra) if extra else ''}: "
+              f"verdict {rep['verdict']}", flush=True)
         return truths, rep
 
     def check_effect(self, truths, rep, words, param, place=None):
@@ -97,6 +100,18 @@ class DroopsimCases(unittest.TestCase):
     def test_a_null_is_none(self):
         _, rep = self.run_case("none", "plain", 112451)
         self.assertEqual(rep["verdict"], "none", rep["explanation"])
+
+    def test_a_null_behind_3x_the_grids_wander_is_none_with_the_bus_frequency(self):
+        _, rep = self.run_case("none", "wander", 826803)
+        self.assertEqual(rep["verdict"], "none", rep["explanation"])
+        bf = rep["bus_frequency"]
+        print(f"  grid's share {bf['share_rms']:.2f} kW rms, coherence with the bias "
+              f"{bf['bias_coherence']:.3f}", flush=True)
+        self.assertTrue(bf["used"], bf["note"])
+        # Told not to use it, the rig sees the wander as something the model lacks.
+        _, rep = self.run_case("none", "wander", 826803, extra=("--bus-frequency", "none"))
+        self.assertNotEqual(rep["verdict"], "none", rep["explanation"])
+        self.assertIsNone(rep["bus_frequency"])
 
     def test_a_combustion_lag_inside_the_speed_loop_is_a_lag_there(self):
         self.check_lag(*self.run_case("extra_lag", "plain", 187690), place="governor_loop")

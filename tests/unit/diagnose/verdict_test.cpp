@@ -237,6 +237,36 @@ TEST(Verdict, ADriftFromHalfWayIsJudgedWhereItIs) {
   EXPECT_EQ(choose(r, thresholds::kMinGainPct), -1);
 }
 
+// An input-side effect whose pair with an immaterial drift scores under the drift alone adds
+// nothing: it is never named, not even as the fallback when the input tests fired (droopsim
+// seed 1 d081, a null: the sign test fired on the fuel map's own curvature, and a friction
+// of 0.004 beside the wander, 0.21 points under the wander alone, was named).
+TEST(Verdict, AnEffectThatAddsNothingBesideAnImmaterialDriftIsNotNamed) {
+  DiagnoseResult r;
+  r.problem.y = white(1000, 10.0, 29);
+  r.problem.y_level = 1750.0;
+  r.problem.scales.z_std = 12.0;
+  r.location.input_mismatch = true;
+  const AppliedEffect drift{Effect::kDrift, {5.0}, Place::kInput, {}};
+  const auto hypothesis = [](std::vector<AppliedEffect> effects, double score) {
+    HypothesisFit h;
+    h.effects = std::move(effects);
+    h.score = score;
+    h.validation_fit_before = 82.9;
+    h.validation_fit_after = 82.9 + score;
+    return h;
+  };
+  r.hypotheses = {
+      hypothesis({drift}, 2.77),
+      hypothesis({{Effect::kCoulombFriction, {0.004}, Place::kInput, {}}, drift}, 2.56)};
+  r.hypotheses[0].derived = {{"drift_rms", 1.0}, {"drift_rms_worst_half", 1.2}};
+  EXPECT_EQ(choose(r, thresholds::kMinGainPct), -1);
+  // The same pair adding half a point to the drift is named.
+  r.hypotheses[1].score = 3.27;
+  std::swap(r.hypotheses[0], r.hypotheses[1]);
+  EXPECT_EQ(choose(r, thresholds::kMinGainPct), 0);
+}
+
 // A level step that the gain change of the dynamics after it matches is a gain change from
 // the step, though its pair with the grid's wander scores under the wander alone (droopsim
 // seed 2 d017: a transducer's gain 0.907 from 100 s, the step taken out of the record; the
