@@ -22,7 +22,11 @@ int exit_code_for(TripCause cause) {
 
 RunContext::RunContext(SessionData& d, drivers::GovernorLink& l, io::RecordingWriter& recorder,
                        LiveView& v, const SessionOptions& options)
-    : data(d), config(d.config), link(l), view(v), loop(l, d.config, recorder, v, options.abort, options.feed) {}
+    : data(d),
+      config(d.config),
+      link(l),
+      view(v),
+      loop(l, d.config, recorder, v, options.abort, options.feed) {}
 
 double RunContext::noise_kw() const {
   return data.steady ? data.steady->noise_pct / 100.0 * p0_kw : 0.0;
@@ -114,7 +118,12 @@ bool SupervisedPhase::run(RunContext& ctx) {
       }
     }
     const TickResult r = ctx.loop.supervised(sup, req);
-    if (r.sample && exciting && !sup.tripped()) {
+    // A reading that is not a number trips the supervisor at the next tick (not_finite); it
+    // is no sample of the plant's answer, and one NaN in a phase's record poisons its
+    // whole analysis (a power "not available" for good: the excitation's analysis of a record
+    // ending in NaN took 3 minutes and up to 16 GB before it failed).
+    const bool readable = r.sample && std::isfinite(r.sample->power_kw);
+    if (readable && exciting && !sup.tripped()) {
       consume(ctx, r, k);
     } else {
       observe(ctx, r);

@@ -21,6 +21,7 @@
 #include <cerrno>
 #include <chrono>
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <optional>
 #include <regex>
@@ -56,6 +57,7 @@ enabled = false
                                          kRampPctPerS);
 
 struct FaultRun {
+  std::filesystem::path dir;
   int code = -1;
   nlohmann::json report;
   io::Recording rec;
@@ -70,6 +72,7 @@ FaultRun commission(const std::string& name, const std::vector<std::string>& fau
                                  extra, (dir / "test.toml").string(), (dir / "out").string());
   for (const auto& f : faults) args += " --fault " + f;
   FaultRun r;
+  r.dir = dir;
   r.code = run_rig(args, dir / "rig.log");
   r.log = read_text(dir / "rig.log");
   r.report = read_json(dir / "out/report.json");
@@ -203,6 +206,10 @@ TEST(SafetyFaults, PowerNotAvailableForGoodStopsTheRecordingAtTheFault) {
   const FaultRun r = commission("nan-for-good", {fmt::format("serve.nan_power=1@t={}", kFaultS)});
   expect_tripped_at_gap(r, "not_finite");
   EXPECT_LE(r.rec.column("plant_time_s")(r.rec.rows() - 1), kFaultS);
+  // The reading that tripped is no sample of the plant's answer: the excitation's analysis
+  // never sees it (with it, h1.csv could not be written and the analysis took minutes).
+  EXPECT_EQ(r.log.find("could not write"), std::string::npos) << r.log;
+  EXPECT_TRUE(std::filesystem::exists(r.dir / "out/h1.csv"));
 }
 
 TEST(SafetyFaults, PowerNotAvailableOverCanTripsNotFinite) {
