@@ -231,6 +231,37 @@ std::vector<Candidate> forward_pairs(const Problem& pr, const std::vector<Hypoth
   return out;
 }
 
+// The best few pairs with an effect that generalises a simpler one (a resonance a damping
+// change, a hysteresis loop a play) beside the same other effect, the simpler one at its best
+// single place: verdict.cpp (prefer_simpler) names the general one only when it beats that
+// pair, which must then have been fitted (droopsim's damper windings: a resonance with a lead
+// of 12-18 ms beside it, the damping change's pair with the lead never formed, or formed from
+// the lead's own single, which found none). It starts from the general pair's other effect as
+// fitted there.
+std::vector<Candidate> simpler_pairs(const std::vector<HypothesisFit>& singles,
+                                     std::vector<const HypothesisFit*> pairs) {
+  std::sort(pairs.begin(), pairs.end(),
+            [](const HypothesisFit* a, const HypothesisFit* b) { return a->score > b->score; });
+  if (pairs.size() > kRefinedForwardPairs) pairs.resize(kRefinedForwardPairs);
+  std::vector<Candidate> out;
+  for (const HypothesisFit* h : pairs) {
+    if (h->effects.size() != 2) continue;
+    for (std::size_t k = 0; k < 2; ++k) {
+      const auto simpler = effect_model(h->effects[k].effect).generalises;
+      if (!simpler || h->effects[1 - k].effect == *simpler) continue;
+      const auto best = std::find_if(singles.begin(), singles.end(), [&](const HypothesisFit& g) {
+        return g.effects.size() == 1 && g.effects[0].effect == *simpler;
+      });
+      if (best == singles.end()) continue;
+      std::vector<AppliedEffect> pair = h->effects;
+      pair[k] = best->effects[0];
+      if (fitted(out, pair[0], pair[1])) continue;  // fitted before, it started elsewhere
+      out.push_back({pair});
+    }
+  }
+  return out;
+}
+
 // When a disturbance dominates the residual, each input-side nonlinearity was placed (its
 // best place ranked) without it: every other place of it is paired with that disturbance
 // too, screened as the forward pairs are (a governor's error deadband behind a drift).
@@ -383,6 +414,10 @@ std::vector<HypothesisFit> search_hypotheses(const Problem& pr, const Location& 
        screen_and_refine(pr, places_with_dominant(pr, hs, tried), base, o, kRefinedDominantPlaces))
     pairs.push_back(std::move(h));
   for (auto& h : gated_with_disturbances(pr, hs, base, o)) pairs.push_back(std::move(h));
+  std::vector<const HypothesisFit*> fitted_pairs;
+  for (const auto& h : pairs) fitted_pairs.push_back(&h);
+  for (auto& h : fit_all(pr, simpler_pairs(hs, fitted_pairs), base, o))
+    pairs.push_back(std::move(h));
   return done(std::move(pairs));
 }
 

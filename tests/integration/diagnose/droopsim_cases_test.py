@@ -22,7 +22,9 @@ judged against droopsim's own truth.
     margin: `backlash`, shown beyond a lag by the direction test with the rate beside it
     (`direction_beyond_lag_z` <= -2.5), its half-width within 20 %;
   * softer damper windings (d055): `load_damping` (a resonance that only re-damps the swing
-    mode, named `resonance` before), its damping ratio within 20 %;
+    mode, named `resonance` before), its damping ratio within 20 %; the same behind three
+    times the noise (d056): `load_damping` with a lead of 10-20 ms beside it (named a
+    resonance with that lead before the damping change's pair with the lead was fitted);
   * a smoke limiter just above the demand (d025): `saturation` on the governor's error with
     the loop's feedback fitted (`governor_error`; named `static_nonlinearity` before the
     limit was tried there), its upper limit within 20 %;
@@ -131,6 +133,10 @@ class DroopsimCases(unittest.TestCase):
 
     def test_softer_damper_windings_are_a_damping_change(self):
         self.check_effect(*self.run_case("load_damping", "plain", 70952), ("load_damping",),
+                          "zeta")
+
+    def test_softer_damper_windings_behind_3x_the_noise_are_a_damping_change(self):
+        self.check_effect(*self.run_case("load_damping", "noisy", 112278), ("load_damping",),
                           "zeta")
 
     def test_a_smoke_limiter_is_a_saturation_on_the_governors_error(self):
