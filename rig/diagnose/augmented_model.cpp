@@ -217,11 +217,13 @@ std::function<double(std::span<const double>)> error_effect(const Problem& pr,
   const LoopFeedback* fb = feedback_fitted(err.place) ? &h : nullptr;
   if (after_pi(err.place)) {
     const PiGovernor gov = pi_governor(err.place_params);
-    const double sigma = pr.scales.u_std;  // a: the bias's rms
+    const PiSignal a = pi_signal(pr, gov, fb);
+    // The signal's own rms, as the place's seeds and bounds have it (problem_at).
+    const double sigma = std::sqrt((a.a.array() - a.a.mean()).square().mean());
     const auto step = m.step;
     return pi_loop_on_error([step, &p = err.params, sigma, dt_s = pr.dt_s](
                                 StepState& s, double x) { return step(p, s, x, sigma, dt_s); },
-                            pi_signal(pr, gov, fb).k, gov, pr.dt_s);
+                            a.k, gov, pr.dt_s);
   }
   const Eigen::VectorXd e0 = linear_error(pr, fb);
   const double sigma = std::sqrt((e0.array() - e0.mean()).square().mean());

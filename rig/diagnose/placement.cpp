@@ -6,6 +6,7 @@
 #include "rig/diagnose/blocks.hpp"
 #include "rig/diagnose/diagnose.hpp"
 #include "rig/diagnose/thresholds.hpp"
+#include "rig/signal/ac_coupling.hpp"
 
 namespace rig::diagnose {
 
@@ -95,6 +96,17 @@ double in_loop_scale(const Problem& pr, const Eigen::VectorXd& w) {
   return sw > 0.0 ? pr.scales.u_std / sw : 1.0;
 }
 
+namespace {
+// The rms ratio of u to w.
+double rms_ratio(const Eigen::VectorXd& u, const Eigen::VectorXd& w) {
+  const auto rms = [](const Eigen::VectorXd& x) {
+    return std::sqrt((x.array() - x.mean()).square().mean());
+  };
+  const double sw = rms(w);
+  return sw > 0.0 ? rms(u) / sw : 1.0;
+}
+}  // namespace
+
 Eigen::VectorXd linear_error(const Problem& pr, const LoopFeedback* feedback) {
   const Eigen::VectorXd y = pr.baseline_z / pr.scales.dc_gain;
   return feedback ? Eigen::VectorXd(pr.u - feed_back(*feedback, y, pr.dt_s))
@@ -108,7 +120,9 @@ PiSignal pi_signal(const Problem& pr, const PiGovernor& gov, const LoopFeedback*
   double sum = 0.0, f = 0.0;
   for (Eigen::Index i = 0; i < e.size(); ++i)
     out.a(i) = f = p * f + (1.0 - p) * (e(i) + r * (sum += e(i)));
-  out.k = in_loop_scale(pr, out.a);
+  // The bias-% equivalent above the integrator's wander (thresholds.hpp).
+  const double hp = thresholds::kPiScaleHighPassS;
+  out.k = rms_ratio(signal::ac_couple(pr.u, pr.dt_s, hp), signal::ac_couple(out.a, pr.dt_s, hp));
   out.a *= out.k;
   return out;
 }

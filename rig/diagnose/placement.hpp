@@ -57,7 +57,7 @@ Eigen::VectorXd front_signal(const Eigen::VectorXd& v, double front_lag_s, doubl
 // k: the in-loop signal w = F u in the bias's rms.
 double in_loop_scale(const Problem& problem, const Eigen::VectorXd& w);
 // The PI-loop place's signal a = k C e0 on the linear loop's error e0 = u - z0 / G0 (k: in
-// the bias's rms) and k.
+// the bias's rms, both taken above thresholds::kPiScaleHighPassS) and k.
 struct PiSignal {
   Eigen::VectorXd a;
   double k = 1.0;

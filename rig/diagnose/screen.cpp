@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <exception>
+#include <mutex>
 #include <numbers>
 #include <thread>
 #include <type_traits>
@@ -69,20 +71,31 @@ void rank(std::vector<HypothesisFit>& hs) {
 
 namespace {
 
-// Every candidate fitted on the problem as it is, on the worker threads.
+// Every candidate fitted on the problem as it is, on the worker threads. A fit that throws
+// stops the others from taking more work; every thread is joined before the first error is
+// rethrown (a joinable thread destroyed by an exception ends the process).
 std::vector<HypothesisFit> fit_each(const Problem& pr, const std::vector<Candidate>& cands,
                                     const Eigen::VectorXd& base, const FitOptions& fit,
                                     int threads) {
   std::vector<HypothesisFit> out(cands.size());
   std::atomic<std::size_t> next{0};
+  std::mutex failed_mutex;
+  std::exception_ptr failed;
   auto work = [&] {
-    for (std::size_t i = next++; i < cands.size(); i = next++)
-      out[i] = fit_hypothesis(pr, cands[i], base, fit);
+    try {
+      for (std::size_t i = next++; i < cands.size(); i = next++)
+        out[i] = fit_hypothesis(pr, cands[i], base, fit);
+    } catch (...) {
+      next = cands.size();
+      const std::lock_guard<std::mutex> lock(failed_mutex);
+      if (!failed) failed = std::current_exception();
+    }
   };
   std::vector<std::thread> pool;
   for (int t = 1; t < std::max(1, threads); ++t) pool.emplace_back(work);
   work();
   for (auto& t : pool) t.join();
+  if (failed) std::rethrow_exception(failed);
   return out;
 }
 

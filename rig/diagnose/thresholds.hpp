@@ -266,6 +266,17 @@ inline constexpr double kPiIntegralSeedsS[] = {0.25, 1.5};
 inline constexpr double kPiFilterMinS = 0.005;
 inline constexpr double kPiFilterMaxS = 0.5;
 inline constexpr double kPiFilterSeedS = 0.05;
+// The signal after the PI is put in the bias's units (its bias-% equivalent, the unit of a
+// limit, a play or a slew rate there) by the ratio of the two rms taken above this
+// first-order high-pass's corner (2 s: 0.08 Hz). Below it the reconstruction is not the
+// governor's: rebuilt from the model's output through a fitted feedback whose static share
+// is not 1, the error keeps a DC part that the PI's integrator turns into a slow wander a
+// real loop removes, and over the whole band that wander set the scale (droopsim's slew
+// limits and plays after the PID read 25-83 % low, seed 2; gensim's PI loop, whose
+// reconstruction is right, within 16 %). With the high-pass: droopsim within 12 % but the
+// two records behind 3x the grid's wander (-38 %, -23 %), gensim within 18 % (from the
+// exact scripts of docs/droopsim.md, "Units after the PI").
+inline constexpr double kPiScaleHighPassS = 2.0;
 
 // --- Inside the governor's loop, its feedback fitted (governor_loop.hpp) ---
 // The feedback h = (a + s T_d) / (1 + s T_h) on G' = G / G0. The static share a: +-2,

@@ -177,7 +177,9 @@ bool could_be_verdict(const HypothesisFit& h, const Location& loc, const DataSca
 }
 
 // The best hypothesis that is h with `from` replaced by `to` (at any place), its other
-// effects as h has them; -1 when none was fitted.
+// effects as h has them, and that could be a verdict (a play after the governor's PI
+// without the input's direction evidence cannot stand in for a hysteresis loop in the
+// output's feedback, which has the output's: the Bouc-Wen record); -1 when none was fitted.
 int substituted(const DiagnoseResult& r, const HypothesisFit& h, Effect from, Effect to) {
   const auto same = [&](const AppliedEffect& a, const AppliedEffect& b) {
     return a.effect == from ? b.effect == to : (b.effect == a.effect && b.place == a.place);
@@ -190,7 +192,7 @@ int substituted(const DiagnoseResult& r, const HypothesisFit& h, Effect from, Ef
             ? same(h.effects[0], g.effects[0])
             : (same(h.effects[0], g.effects[0]) && same(h.effects[1], g.effects[1])) ||
                   (same(h.effects[0], g.effects[1]) && same(h.effects[1], g.effects[0]));
-    if (match) return static_cast<int>(j);
+    if (match && could_be_verdict(g, r.location, r.problem.scales)) return static_cast<int>(j);
   }
   return -1;
 }

@@ -354,6 +354,28 @@ TEST(Verdict, AResonanceThatOnlyReDampsTheModelsModeIsADampingChange) {
             "resonance");
 }
 
+// A hysteresis loop in the output's feedback, which the output's direction evidences, is not
+// replaced by the simpler play at a place without evidence (the Bouc-Wen record: a play
+// after the governor's PI beside the same gain change scored within the nested margin of the
+// loop's pair, and the input's direction shows nothing, z -1.2).
+TEST(Verdict, ALoopIsNotReplacedByAPlayWithoutEvidenceOfItsOwn) {
+  const AppliedEffect gain{Effect::kGainChange, {0.886}};
+  // half_width, shape_ratio, linear_share, hysteretic_share; feedback_gain
+  const AppliedEffect loop{
+      Effect::kHysteresis, {12.6, 0.98, 1.1, -1.08}, Place::kFeedback, {-0.58}};
+  // half_width; integral_time_s, filter_lag_s, loop_static_share, loop_derivative_s,
+  // loop_filter_s
+  const AppliedEffect play{
+      Effect::kBacklash, {2.28}, Place::kGovernorPi, {1.0, 0.05, 1.0, 0.03, 0.01}};
+  DiagnoseResult r = ranked({{{loop, gain}, 8.71}, {{play, gain}, 8.12}, {{gain}, 2.0}});
+  r.location.amp.direction_z = -1.2;
+  r.location.amp.output_direction_z = 15.6;
+  EXPECT_EQ(verdict_of(r.hypotheses[static_cast<std::size_t>(choose(r, 0.2))]), "hysteresis");
+  // With the input's direction evidence the play may stand in for the loop.
+  r.location.amp.direction_z = -10.0;
+  EXPECT_EQ(verdict_of(r.hypotheses[static_cast<std::size_t>(choose(r, 0.2))]), "backlash");
+}
+
 // A play's direction effect beyond what a lag adds (thresholds.hpp kDirectionBeyondLagZ)
 // lets a play within the nonlinear margin of a lag be the verdict; without it the lag is.
 TEST(Verdict, APlayShownBeyondALagIsNamedOverTheLag) {

@@ -1,0 +1,195 @@
+#include "rig/diagnose/pairs.hpp"
+
+#include <algorithm>
+#include <optional>
+
+#include "rig/diagnose/effect_registry.hpp"
+#include "rig/diagnose/governor_loop.hpp"
+#include "rig/diagnose/placement.hpp"
+#include "rig/diagnose/split.hpp"
+#include "rig/diagnose/verdict.hpp"
+
+namespace rig::diagnose {
+namespace {
+
+using thresholds::kDominantDisturbanceGainPct;
+using thresholds::kPairedInputSingles;
+using thresholds::kPairedWithDisturbance;
+using thresholds::kRefinedForwardPairs;
+
+// Places that hold one effect only (one front lag, one feedback path, one error loop).
+bool one_per_record(Place p) {
+  return p == Place::kInLoop || p == Place::kFeedback || in_error_loop(p) ||
+         p == Place::kGovernorLoop;
+}
+
+}  // namespace
+
+// Whether a and b can share a model: one effect per loop place, and the error loop (whose
+// correction goes through the linear part only, error_loop.hpp) with no other loop.
+bool pairable(const AppliedEffect& a, const AppliedEffect& b) {
+  if (a.place == b.place && one_per_record(a.place)) return false;
+  const auto loop = [](const AppliedEffect& e) {
+    return e.place == Place::kInLoop || e.place == Place::kFeedback ||
+           kind_of(e.effect) == EffectKind::kFeedback;
+  };
+  const auto error_loop = [](const AppliedEffect& e) {  // (the governor loop's changes G)
+    return in_error_loop(e.place) || e.place == Place::kGovernorLoop;
+  };
+  if (error_loop(a) && error_loop(b)) return false;
+  return !((error_loop(a) && loop(b)) || (error_loop(b) && loop(a)));
+}
+
+// Whether an effect is tried at more than one place (singles below).
+bool several_places(Effect e) {
+  const EffectModel& m = effect_model(e);
+  return kind_of(e) == EffectKind::kInputNonlinearity ||
+         (kind_of(e) == EffectKind::kLinear && (m.apply_on_error || m.loop_factor));
+}
+
+// The pair a + b started from both singles' fits and from b's own starting points at its
+// place, seeded from `left`, the location of what a leaves (b's single may have taken a's part
+// as well: a dead time the lag of a slew limit, a limit fitted without the drift beside it).
+Candidate pair_starts(const AppliedEffect& a, const AppliedEffect& b, const Problem& pr,
+                      const Location& left, bool b_first) {
+  Candidate c;
+  const auto add = [&](const AppliedEffect& x) {
+    c.push_back(b_first ? std::vector<AppliedEffect>{x, a} : std::vector<AppliedEffect>{a, x});
+  };
+  add(b);
+  for (auto& start : placed_starts(b.effect, b.place, pr, left)) add(start.front());
+  return c;
+}
+
+// Pairs of the best input-side singles (the best place of each effect), and of those with a
+// detected disturbance; every input-side effect with a disturbance that dominates the
+// residual (its single's score, fitted without it, says little then).
+std::vector<Candidate> pair_candidates(const Problem& pr,
+                                       const std::vector<HypothesisFit>& singles) {
+  std::vector<const HypothesisFit*> inputs, dists;  // singles are ranked
+  for (const auto& h : singles) {
+    if (!has_input_side(h)) {
+      dists.push_back(&h);
+      continue;
+    }
+    const bool seen = std::any_of(inputs.begin(), inputs.end(), [&](const HypothesisFit* g) {
+      return g->effects[0].effect == h.effects[0].effect;
+    });
+    if (!seen) inputs.push_back(&h);
+  }
+  const bool dominant = !dists.empty() && dists.front()->score >= kDominantDisturbanceGainPct;
+  std::vector<std::optional<Location>> left(dists.size());
+  const auto lag = [](Effect e) { return e == Effect::kExtraLag || e == Effect::kSensorLag; };
+  std::vector<Candidate> out;
+  for (std::size_t i = 0; i < inputs.size(); ++i) {
+    const AppliedEffect& a = inputs[i]->effects[0];
+    for (std::size_t j = i + 1; j < std::min(inputs.size(), kPairedInputSingles); ++j) {
+      const AppliedEffect& b = inputs[j]->effects[0];
+      if (i >= kPairedInputSingles || (lag(a.effect) && lag(b.effect))) continue;  // twins
+      if (!pairable(a, b)) continue;  // one front lag, one feedback path, one error loop
+      out.push_back({{a, b}});
+    }
+    for (std::size_t j = 0; j < dists.size(); ++j) {
+      if (i >= kPairedWithDisturbance && !(dominant && j == 0)) continue;
+      if (!left[j]) left[j] = locate(pr, dists[j]->yhat);  // a was fitted without it
+      out.push_back(pair_starts(dists[j]->effects[0], a, pr, *left[j], true));
+    }
+  }
+  return out;
+}
+
+// Whether the pair a + b (either order, same places) is among the candidates cs.
+bool fitted(const std::vector<Candidate>& cs, const AppliedEffect& a, const AppliedEffect& b) {
+  const auto same = [](const AppliedEffect& x, const AppliedEffect& y) {
+    return x.effect == y.effect && x.place == y.place;
+  };
+  return std::any_of(cs.begin(), cs.end(), [&](const Candidate& c) {
+    const auto& p = c.front();
+    return p.size() == 2 && ((same(p[0], a) && same(p[1], b)) || (same(p[0], b) && same(p[1], a)));
+  });
+}
+
+// A forward step from the best input-side single that could be a verdict, and from the best
+// linear one (a nonlinearity in the loop can stand in for a lag, and the lag's pair with a
+// gain is then never formed): each with every other input-side effect at its best place,
+// but for the pairs already among `existing`.
+std::vector<Candidate> forward_pairs(const Problem& pr, const std::vector<HypothesisFit>& singles,
+                                     const std::vector<Candidate>& existing, const Location& loc) {
+  const auto lag = [](Effect e) { return e == Effect::kExtraLag || e == Effect::kSensorLag; };
+  std::vector<Candidate> out;
+  for (const bool linear : {false, true}) {
+    const auto first = std::find_if(singles.begin(), singles.end(), [&](const HypothesisFit& h) {
+      return h.effects.size() == 1 && has_input_side(h) && could_be_verdict(h, loc, pr.scales) &&
+             (!linear || !has_nonlinearity(h));
+    });
+    if (first == singles.end()) continue;
+    const AppliedEffect& a = first->effects[0];
+    const Location after_a = locate(pr, first->yhat);
+    std::vector<Effect> seen{a.effect};
+    for (const auto& h : singles) {  // ranked: each effect's best place that can pair with a
+      if (h.effects.size() != 1 || !has_input_side(h)) continue;
+      const AppliedEffect& b = h.effects[0];
+      if (std::find(seen.begin(), seen.end(), b.effect) != seen.end()) continue;
+      if (lag(a.effect) && lag(b.effect)) continue;
+      if (!pairable(a, b)) continue;  // its next place may pair (a dead time in the error loop)
+      seen.push_back(b.effect);
+      if (fitted(existing, a, b) || fitted(out, a, b)) continue;
+      out.push_back(pair_starts(a, b, pr, after_a));
+    }
+  }
+  return out;
+}
+
+// The best few pairs with an effect that generalises a simpler one (a resonance a damping
+// change, a hysteresis loop a play) beside the same other effect, the simpler one at its best
+// single place: verdict.cpp (prefer_simpler) names the general one only when it beats that
+// pair, which must then have been fitted (droopsim's damper windings: a resonance with a lead
+// of 12-18 ms beside it, the damping change's pair with the lead never formed, or formed from
+// the lead's own single, which found none). It starts from the general pair's other effect as
+// fitted there.
+std::vector<Candidate> simpler_pairs(const std::vector<HypothesisFit>& singles,
+                                     std::vector<const HypothesisFit*> pairs) {
+  std::sort(pairs.begin(), pairs.end(),
+            [](const HypothesisFit* a, const HypothesisFit* b) { return a->score > b->score; });
+  if (pairs.size() > kRefinedForwardPairs) pairs.resize(kRefinedForwardPairs);
+  std::vector<Candidate> out;
+  for (const HypothesisFit* h : pairs) {
+    if (h->effects.size() != 2) continue;
+    for (std::size_t k = 0; k < 2; ++k) {
+      const auto simpler = effect_model(h->effects[k].effect).generalises;
+      if (!simpler || h->effects[1 - k].effect == *simpler) continue;
+      const AppliedEffect& other = h->effects[1 - k];
+      const auto best = std::find_if(singles.begin(), singles.end(), [&](const HypothesisFit& g) {
+        return g.effects.size() == 1 && g.effects[0].effect == *simpler &&
+               pairable(g.effects[0], other);  // its best place that can sit beside the other
+      });
+      if (best == singles.end()) continue;
+      std::vector<AppliedEffect> pair = h->effects;
+      pair[k] = best->effects[0];
+      if (fitted(out, pair[0], pair[1])) continue;  // fitted before, it started elsewhere
+      out.push_back({pair});
+    }
+  }
+  return out;
+}
+
+// When a disturbance dominates the residual, each input-side nonlinearity was placed (its
+// best place ranked) without it: every other place of it is paired with that disturbance
+// too, screened as the forward pairs are (a governor's error deadband behind a drift).
+std::vector<Candidate> places_with_dominant(const Problem& pr,
+                                            const std::vector<HypothesisFit>& singles,
+                                            const std::vector<Candidate>& existing) {
+  const auto dist = std::find_if(singles.begin(), singles.end(),
+                                 [](const HypothesisFit& h) { return !has_input_side(h); });
+  if (dist == singles.end() || dist->score < kDominantDisturbanceGainPct) return {};
+  const Location left = locate(pr, dist->yhat);
+  std::vector<Candidate> out;
+  for (const auto& h : singles) {
+    if (h.effects.size() != 1 || !several_places(h.effects[0].effect)) continue;
+    if (!fitted(existing, h.effects[0], dist->effects[0]))
+      out.push_back(pair_starts(dist->effects[0], h.effects[0], pr, left, true));
+  }
+  return out;
+}
+
+}  // namespace rig::diagnose

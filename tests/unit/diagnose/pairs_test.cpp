@@ -1,0 +1,64 @@
+// The pairs the hypothesis search forms (pairs.hpp) and the fits on the worker threads
+// (screen.hpp): a pair is formed only where both effects can sit, and a fit that cannot be
+// made is an error the caller sees, not the end of the process.
+#include "rig/diagnose/pairs.hpp"
+
+#include <gtest/gtest.h>
+
+#include <stdexcept>
+
+#include "records.hpp"
+#include "rig/diagnose/augmented_model.hpp"
+#include "rig/diagnose/screen.hpp"
+#include "rig/diagnose/split.hpp"
+
+namespace rig::diagnose {
+namespace {
+
+HypothesisFit fit_of(std::vector<AppliedEffect> effects, double score) {
+  HypothesisFit h;
+  h.effects = std::move(effects);
+  h.score = score;
+  return h;
+}
+
+// A hysteresis loop's pair is compared with its play's (verdict.cpp prefer_simpler). The
+// play's best single sat after the governor's PI, which cannot share a model with an effect
+// on the loop's error: the pair takes the play's best place that can (the real exchanger
+// record ended the process when the first was fitted).
+TEST(Pairs, ASimplerPairIsFormedOnlyWhereBothEffectsCanSit) {
+  const AppliedEffect play_after_pi{Effect::kBacklash, {0.2}, Place::kPiLoop, {0.5, 0.05}};
+  const AppliedEffect play_at_input{Effect::kBacklash, {0.2}, Place::kInput, {}};
+  const AppliedEffect loop{Effect::kHysteresis, {0.3, 0.5, 1.0, 0.5}, Place::kInput, {}};
+  const AppliedEffect map_on_error{Effect::kStaticNonlinearity, {0.1, 0.0, 0.2}, Place::kError, {}};
+  ASSERT_FALSE(pairable(play_after_pi, map_on_error));
+  ASSERT_TRUE(pairable(play_at_input, map_on_error));
+  const std::vector<HypothesisFit> singles{fit_of({play_after_pi}, 10.0),
+                                           fit_of({play_at_input}, 8.0)};
+  const HypothesisFit pair = fit_of({loop, map_on_error}, 12.0);
+  const std::vector<Candidate> formed = simpler_pairs(singles, {&pair});
+  ASSERT_EQ(formed.size(), 1u);
+  const auto& start = formed.front().front();
+  ASSERT_EQ(start.size(), 2u);
+  EXPECT_EQ(start[0].effect, Effect::kBacklash);
+  EXPECT_EQ(start[0].place, Place::kInput);
+  EXPECT_EQ(start[1].effect, Effect::kStaticNonlinearity);
+}
+
+// Two effects in the error loop make no model (augmented_model.hpp): fitted on the worker
+// threads, every thread is joined and the error reaches the caller.
+TEST(Screen, AFitThatThrowsOnAWorkerIsRethrownNotFatal) {
+  int blocks = 0;
+  Eigen::Index warm = 0;
+  const Problem pr = prepare_problem(test::null_record(5), &blocks, &warm);
+  const Eigen::VectorXd base = model_output(pr, {}).yhat;
+  const Candidate both_on_error{{{Effect::kDeadband, {0.1}, Place::kError, {}},
+                                 {Effect::kSaturation, {1.0, 1.0, 0.01}, Place::kError, {}}}};
+  DiagnoseOptions o;
+  o.threads = 2;
+  EXPECT_THROW(fit_all(pr, {both_on_error, both_on_error, both_on_error}, base, o),
+               std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace rig::diagnose
