@@ -73,5 +73,10 @@ double weighted_fit_pct(const Eigen::VectorXd& y, const Eigen::VectorXd& yhat,
 
 // The least damped complex pole pair (freq_hz, zeta) of tf's denominator, if any.
 std::optional<std::pair<double, double>> dominant_mode(const model::TransferFunction& tf);
+// Whether tf has two lightly damped modes apart for the moved-modes form of a resonance
+// (effects/moved_modes.cpp).
+bool moved_modes_possible(const model::TransferFunction& tf);
+// The moved mode's relative change of frequency (|freq_hz - f0| / f0; infinite without one).
+double moved_mode_shift(const model::TransferFunction& tf, double freq_hz);
 
 }  // namespace rig::diagnose

@@ -30,7 +30,8 @@ constexpr std::array<const EffectModel*, kAllEffects.size()> kTable = {&kDeadTim
                                                                        &kGainChangeEffect,
                                                                        &kPeriodicDisturbanceEffect,
                                                                        &kDriftEffect,
-                                                                       &kHysteresisEffect};
+                                                                       &kHysteresisEffect,
+                                                                       &kMovedModesEffect};
 
 std::size_t index_of(Effect effect) { return static_cast<std::size_t>(effect); }
 

@@ -41,9 +41,10 @@ enum class Effect {
   kPeriodicDisturbance,
   kDrift,
   kHysteresis,
+  kMovedModes,  // "resonance": the model's own two modes moved together (moved_modes.cpp)
 };
 
-inline constexpr std::array<Effect, 17> kAllEffects = {Effect::kDeadTime,
+inline constexpr std::array<Effect, 18> kAllEffects = {Effect::kDeadTime,
                                                        Effect::kExtraLag,
                                                        Effect::kResonance,
                                                        Effect::kAcCoupling,
@@ -59,7 +60,8 @@ inline constexpr std::array<Effect, 17> kAllEffects = {Effect::kDeadTime,
                                                        Effect::kGainChange,
                                                        Effect::kPeriodicDisturbance,
                                                        Effect::kDrift,
-                                                       Effect::kHysteresis};
+                                                       Effect::kHysteresis,
+                                                       Effect::kMovedModes};
 
 // DESIGN.md section 9 word ("dead_time", ...).
 const char* to_string(Effect effect);

@@ -17,12 +17,14 @@ namespace rig::diagnose {
 
 struct FrequencyBin {
   double freq_hz = 0.0;
-  std::complex<double> measured;    // H1 = G_yu / G_uu
-  std::complex<double> model;       // the baseline (with the recording's coupling)
-  double coherence = 0.0;           // of (u, y)
-  double residual_coherence = 0.0;  // of (u, r): the part of r explained linearly by u
-  double residual_psd = 0.0;        // of r, per Hz
-  bool significant = false;         // residual coherence beyond its null threshold
+  std::complex<double> measured;           // H1 = G_yu / G_uu
+  std::complex<double> model;              // the baseline (with the recording's coupling)
+  double coherence = 0.0;                  // of (u, y)
+  double residual_coherence = 0.0;         // of (u, r): the part of r explained linearly by u
+  std::complex<double> residual_response;  // G_ru / G_uu: measured - residual_response is
+                                           // what the model that left r responds
+  double residual_psd = 0.0;               // of r, per Hz
+  bool significant = false;                // residual coherence beyond its null threshold
 };
 
 struct FrequencyLocation {

@@ -88,6 +88,7 @@ FrequencyLocation locate_frequency(const Problem& pr, const Eigen::VectorXd& r) 
     b.residual_coherence =
         sr.guu(k) * sr.gyy(k) > 0.0 ? std::norm(sr.gyu(k)) / (sr.guu(k) * sr.gyy(k)) : 0.0;
     b.residual_psd = sr.gyy(k) * psd_scale;
+    if (sr.guu(k) > 0.0) b.residual_response = sr.gyu(k) / sr.guu(k);
     b.significant = sy.guu(k) >= 0.01 * guu_max && b.residual_coherence > loc.coherence_threshold;
     if (b.significant) {
       if (!loc.band_hz) loc.band_hz = std::make_pair(b.freq_hz, b.freq_hz);

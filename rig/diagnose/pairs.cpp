@@ -23,6 +23,13 @@ bool one_per_record(Place p) {
          p == Place::kGovernorLoop;
 }
 
+// Two forms of one thing: the two lags (told apart afterwards), or two forms of one word (a
+// resonance as a factor and as the model's modes moved).
+bool twins(Effect a, Effect b) {
+  const auto lag = [](Effect e) { return e == Effect::kExtraLag || e == Effect::kSensorLag; };
+  return (lag(a) && lag(b)) || std::string_view(to_string(a)) == to_string(b);
+}
+
 }  // namespace
 
 // Whether a and b can share a model: one effect per loop place, and the error loop (whose
@@ -79,13 +86,12 @@ std::vector<Candidate> pair_candidates(const Problem& pr,
   }
   const bool dominant = !dists.empty() && dists.front()->score >= kDominantDisturbanceGainPct;
   std::vector<std::optional<Location>> left(dists.size());
-  const auto lag = [](Effect e) { return e == Effect::kExtraLag || e == Effect::kSensorLag; };
   std::vector<Candidate> out;
   for (std::size_t i = 0; i < inputs.size(); ++i) {
     const AppliedEffect& a = inputs[i]->effects[0];
     for (std::size_t j = i + 1; j < std::min(inputs.size(), kPairedInputSingles); ++j) {
       const AppliedEffect& b = inputs[j]->effects[0];
-      if (i >= kPairedInputSingles || (lag(a.effect) && lag(b.effect))) continue;  // twins
+      if (i >= kPairedInputSingles || twins(a.effect, b.effect)) continue;
       if (!pairable(a, b)) continue;  // one front lag, one feedback path, one error loop
       out.push_back({{a, b}});
     }
@@ -115,7 +121,6 @@ bool fitted(const std::vector<Candidate>& cs, const AppliedEffect& a, const Appl
 // but for the pairs already among `existing`.
 std::vector<Candidate> forward_pairs(const Problem& pr, const std::vector<HypothesisFit>& singles,
                                      const std::vector<Candidate>& existing, const Location& loc) {
-  const auto lag = [](Effect e) { return e == Effect::kExtraLag || e == Effect::kSensorLag; };
   std::vector<Candidate> out;
   for (const bool linear : {false, true}) {
     const auto first = std::find_if(singles.begin(), singles.end(), [&](const HypothesisFit& h) {
@@ -130,7 +135,7 @@ std::vector<Candidate> forward_pairs(const Problem& pr, const std::vector<Hypoth
       if (h.effects.size() != 1 || !has_input_side(h)) continue;
       const AppliedEffect& b = h.effects[0];
       if (std::find(seen.begin(), seen.end(), b.effect) != seen.end()) continue;
-      if (lag(a.effect) && lag(b.effect)) continue;
+      if (twins(a.effect, b.effect)) continue;
       if (!pairable(a, b)) continue;  // its next place may pair (a dead time in the error loop)
       seen.push_back(b.effect);
       if (fitted(existing, a, b) || fitted(out, a, b)) continue;

@@ -98,6 +98,7 @@ std::vector<Effect> applicable(const Problem& pr, const Location& loc, const Dia
   for (Effect e : pool) {
     if (e == Effect::kSensorLag) continue;  // the twin of extra_lag, told apart afterwards
     if (e == Effect::kLoadDamping && !dominant_mode(pr.tf)) continue;
+    if (e == Effect::kMovedModes && !moved_modes_possible(pr.tf)) continue;
     if (e == Effect::kPeriodicDisturbance && !loc.dist.periodic) continue;
     if (e == Effect::kDrift && !loc.dist.drift) continue;
     if (kind_of(e) != EffectKind::kDisturbance && !loc.input_mismatch && loc.clip.side == 0 &&

@@ -59,6 +59,19 @@ inline constexpr double kDirectionEvidenceZ = 3.0;
 // gensim -2.1 (a saturation) or above (a rate limit: +3 to +8, the other sign); gensim's
 // plays and hysteresis inside the PI loop -1.9 to +2.1 (no evidence: there the margin holds).
 inline constexpr double kDirectionBeyondLagZ = 2.5;
+// A gain the data show: |H1 / G| this far from 1 (6 dB, twice or half the model's gain) in a
+// bin whose residual coherence is significant and where |H1|'s relative standard error
+// sqrt((1 - c) / (2 M c)) (coherence c, M effective Welch segments) is at most
+// kGainPeakRelError: the 6 dB are then four standard errors or more. A hypothesis accounts for it
+// when its own response there (H1 less the residual's) takes at least kGainPeakTakenShare of
+// the disagreement's |ln|H1 / G||, i.e. leaves under half of it in dB; the
+// best one that does, within kNonlinearOverLinearPct of the choice, is the verdict
+// (verdict.cpp): a delay or a lag in the loop cannot raise the gain by 6 dB above the band,
+// a moved shaft mode does (droopsim's softened coupling: +10 to +15 dB at 5-5.4 Hz, the
+// delay on the governor's error 0.1-0.3 points above the moved modes).
+inline constexpr double kGainPeakRatio = 2.0;
+inline constexpr double kGainPeakRelError = 0.25;
+inline constexpr double kGainPeakTakenShare = 0.5;
 
 // --- Location (locate.cpp, locate_time_amplitude.cpp; docs/diagnose.md Method step 2) ---
 // A residual spectral line: its PSD bin exceeds this many times the median of its

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <optional>
 
 #include "rig/diagnose/effect_registry.hpp"
 #include "rig/diagnose/placement.hpp"
@@ -16,6 +17,9 @@ using thresholds::kDirectionEvidenceZ;
 using thresholds::kDriftMaterialFraction;
 using thresholds::kDriftMaterialGainPct;
 using thresholds::kDriftMaterialOfLevel;
+using thresholds::kGainPeakRatio;
+using thresholds::kGainPeakRelError;
+using thresholds::kGainPeakTakenShare;
 using thresholds::kNestedMarginPct;
 using thresholds::kNonlinearOverLinearPct;
 using thresholds::kOperatingLevelStds;
@@ -116,6 +120,43 @@ bool play_beyond_lag(const DiagnoseResult& r, const HypothesisFit& h) {
          -kDirectionBeyondLagZ;
 }
 
+struct GainPeak {
+  double freq_hz = 0.0;
+  double log_ratio = 0.0;  // |ln |H1 / G||
+};
+
+// The largest disagreement of gain the data show beyond their uncertainty (thresholds.hpp),
+// if any.
+std::optional<GainPeak> gain_peak(const Location& loc) {
+  double best = std::log(kGainPeakRatio), at = -1.0;
+  for (const auto& b : loc.freq.bins) {
+    if (!b.significant || !(b.coherence > 0.0) || std::abs(b.model) <= 0.0) continue;
+    const double m_eff = std::max(2.0, 0.75 * loc.freq.segments);
+    const double rel_error = std::sqrt((1.0 - b.coherence) / (2.0 * m_eff * b.coherence));
+    if (rel_error > kGainPeakRelError) continue;
+    const double dev = std::abs(std::log(std::abs(b.measured / b.model)));
+    if (dev >= best) best = dev, at = b.freq_hz;
+  }
+  if (at < 0.0) return std::nullopt;
+  return GainPeak{at, best};
+}
+
+// Whether h's own response at the peak (the measured one less that of the residual h
+// leaves) takes at least kGainPeakTakenShare of the disagreement's |ln| (thresholds.hpp).
+bool accounts_for(const DiagnoseResult& r, const HypothesisFit& h, const GainPeak& peak) {
+  if (h.yhat.size() != r.problem.y.size()) return false;
+  const FrequencyLocation left = locate_frequency(r.problem, r.problem.y - h.yhat);
+  const auto bin =
+      std::min_element(left.bins.begin(), left.bins.end(), [&](const auto& a, const auto& b) {
+        return std::abs(a.freq_hz - peak.freq_hz) < std::abs(b.freq_hz - peak.freq_hz);
+      });
+  if (bin == left.bins.end()) return false;
+  const std::complex<double> own = bin->measured - bin->residual_response;
+  if (std::abs(own) <= 0.0) return false;
+  const double left_log = std::abs(std::log(std::abs(bin->measured / own)));
+  return left_log <= (1.0 - kGainPeakTakenShare) * peak.log_ratio;
+}
+
 int choose_raw(const DiagnoseResult& r, double min_gain, Only only = Only::kAny) {
   const bool input = r.location.input_mismatch;
   const bool unseen = !input && r.location.clip.side == 0;
@@ -198,8 +239,12 @@ int substituted(const DiagnoseResult& r, const HypothesisFit& h, Effect from, Ef
 }
 
 // Whether a resonance only re-damps one of the model's own modes (thresholds.hpp): the
-// factor's zeros sit on the mode, its poles moved the damping ratio, not the frequency.
+// factor's zeros sit on the mode, its poles moved the damping ratio, not the frequency; as
+// the model's modes moved, the one that should move stayed within kRedampZerosFrequency.
 bool redamps_own_mode(const AppliedEffect& e, const model::TransferFunction& tf) {
+  // The model's modes "moved" with the moved one staying where it was: a damping change.
+  if (e.effect == Effect::kMovedModes && !e.params.empty())
+    return moved_mode_shift(tf, e.params[0]) <= kRedampZerosFrequency;
   if (e.effect != Effect::kResonance || e.params.size() < 4 || !(e.params[3] > 0.0)) return false;
   const double f = e.params[0], zeta = e.params[1];
   const double f_zeros = f / std::sqrt(e.params[3]);
@@ -255,6 +300,28 @@ int step_gain_choice(const DiagnoseResult& r, double min_gain) {
   return -1;
 }
 
+// A gain the data show beyond their uncertainty (thresholds.hpp) that the choice i leaves:
+// the best hypothesis within kNonlinearOverLinearPct that accounts for it, if one does (not a
+// nonlinear one in place of a linear choice).
+int account_for_gain_peak(const DiagnoseResult& r, int i, double min_gain) {
+  const auto peak = gain_peak(r.location);
+  if (!peak) return i;
+  const auto& chosen = r.hypotheses[static_cast<std::size_t>(i)];
+  if (accounts_for(r, chosen, *peak)) return i;
+  for (std::size_t j = 0; j < r.hypotheses.size(); ++j) {  // ranked
+    const auto& g = r.hypotheses[j];
+    if (g.score < std::max(min_gain, chosen.score - kNonlinearOverLinearPct)) break;
+    // A nonlinearity must still beat a linear choice by its margin (step 4): the peak is a
+    // linear shape.
+    if (static_cast<int>(j) == i || g.screened_only || !has_input_side(g) ||
+        (has_nonlinearity(g) && !has_nonlinearity(chosen)) ||
+        !could_be_verdict(g, r.location, r.problem.scales) || !pair_adds(r.hypotheses, g))
+      continue;
+    if (accounts_for(r, g, *peak)) return static_cast<int>(j);
+  }
+  return i;
+}
+
 // A pair "effect + drift" whose drift alone is immaterial is reported as the effect alone
 // when that single scores min_gain too: the augmented model should not carry the set's
 // normal wander as a change.
@@ -279,6 +346,7 @@ int choose(const DiagnoseResult& r, double min_gain) {
     const int j = choose_raw(r, min_gain, Only::kLinear);
     if (j >= 0 && at(j).score >= at(i).score - kNonlinearOverLinearPct) i = j;
   }
+  i = account_for_gain_peak(r, i, min_gain);
   const auto& h = r.hypotheses[static_cast<std::size_t>(i)];
   if (h.effects.size() != 2 || h.effects[1].effect != Effect::kDrift) return i;
   bool drift_immaterial = false;

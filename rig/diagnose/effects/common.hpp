@@ -30,6 +30,7 @@ extern const EffectModel kLoadDampingEffect;
 extern const EffectModel kGainChangeEffect;
 extern const EffectModel kPeriodicDisturbanceEffect;
 extern const EffectModel kDriftEffect;
+extern const EffectModel kMovedModesEffect;
 
 namespace effects {
 

@@ -51,7 +51,8 @@ int main(int argc, char** argv) {
     if (a == "--verbose") verbose = std::string(argv[i + 1]) == "1";
   }
   std::vector<std::optional<Effect>> effects = {std::nullopt};
-  for (Effect e : kAllEffects) effects.push_back(e);
+  for (Effect e : kAllEffects)  // the moved modes are a second form of resonance, not a case
+    if (e != Effect::kMovedModes) effects.push_back(e);
   const Concealment cons[] = {Concealment::kNoise, Concealment::kDrift, Concealment::kAcCoupling,
                               Concealment::kPartial};
   std::vector<Row> rows;

@@ -94,6 +94,8 @@ std::vector<double> true_params(Effect e, const DataScales& s, const model::Tran
       return {30.0};
     case Effect::kHysteresis:
       return {0.3 * su, 0.0, 1.0, -1.0};  // a play-type loop: v = u - z
+    case Effect::kMovedModes:             // a second form of resonance: its cases are resonance's
+      return {};
   }
   return {};
 }

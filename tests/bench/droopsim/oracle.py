@@ -16,6 +16,10 @@ Detectable when the true structure gains >= MIN_GAIN points of validation fit ov
 nominal structure AND an F test on the validation residuals, both prewhitened by an AR(20)
 model of the true structure's residual, gives p < ALPHA. The fit, whitening and F-test
 arithmetic are gensim's (`_fit`, `_whiten`, imported); the blocks use droopsim's rows.
+
+A pair's members are also judged one by one (`members`): the best true structure without
+the member (its parameter at nominal, or a disturbance's regressors left out) against the
+best with it, by the same gain and nested F test.
 """
 import importlib.util
 import math
@@ -163,8 +167,48 @@ def judge(case, y_all, model_doc):
         fstat = max(ss0 - ss1, 0.0) / max(k, 1) / (ss1 / max(neff - k, 1.0))
         pval = float(stats.f.sf(fstat, max(k, 1), max(neff - k, 1.0)))
     gain = v1 - v0 - twin_gain if case["truths"] else 0.0
-    return dict(detectable=bool(case["truths"]) and gain >= MIN_GAIN and pval < ALPHA,
-                vfit_nominal=round(v0, 3), vfit_true=round(v1 if case["truths"] else v0, 3),
-                gain=round(gain, 3), twin_gain=round(twin_gain, 3), f=round(fstat, 2), p=pval,
-                n_eff=round(neff),
-                fitted={t["effect"]: v for t, v, _ in combo})
+    out = dict(detectable=bool(case["truths"]) and gain >= MIN_GAIN and pval < ALPHA,
+               vfit_nominal=round(v0, 3), vfit_true=round(v1 if case["truths"] else v0, 3),
+               gain=round(gain, 3), twin_gain=round(twin_gain, 3), f=round(fstat, 2), p=pval,
+               n_eff=round(neff),
+               fitted={t["effect"]: v for t, v, _ in combo})
+    if len(case["truths"]) > 1:
+        out["members"] = members(case, y_all, est, val, combos, (v1, r1), twin_gain)
+    return out
+
+
+def members(case, y_all, est, val, combos, full, twin_gain):
+    """Each member of a pair judged as the single effect the other leaves to be found: the
+    best true structure without it (its parameter at nominal, or a disturbance's regressors
+    left out) against the best with it, by the same gain and nested F test (its own
+    parameters counted). A member its pair's best fit does not need is not detectable."""
+    y = y_all[:, 0]
+    n = len(y)
+    v1, r1 = full
+    out = {}
+    for i, t in enumerate(case["truths"]):
+        others = [d for d in case["truths"] if d is not t and d["effect"] in fx.DISTURBANCES]
+        extra = []
+        for d in others:
+            extra += regressors(d["effect"], n, case["onset_s"])
+        in_sample = any(d["effect"] == "drift" for d in others)
+        if t["effect"] in fx.DISTURBANCES:
+            pool, k, twin = combos, len(regressors(t["effect"], n, case["onset_s"])), twin_gain
+        else:
+            j = [c for c in case["truths"] if c["effect"] not in fx.DISTURBANCES].index(t)
+            pool, k, twin = [c for c in combos if c[j][2]], 1, 0.0
+        best = None
+        for c in pool:
+            col = combos.index(c) + 1
+            ef, vf, r = _fit(y, y_all[:, col], est, val, extra or None, in_sample)
+            if best is None or ef > best[0]:
+                best = (ef, vf, r)
+        _, v0, r0 = best
+        w1, w0 = _whiten(r1, r0)
+        ss0, ss1 = float(np.sum(w0 ** 2)), float(np.sum(w1 ** 2))
+        fstat = max(ss0 - ss1, 0.0) / k / (ss1 / max(len(w1) - k, 1.0))
+        pval = float(stats.f.sf(fstat, k, max(len(w1) - k, 1.0)))
+        gain = v1 - v0 - twin
+        out[t["effect"]] = dict(detectable=bool(gain >= MIN_GAIN and pval < ALPHA),
+                                gain=round(gain, 3), p=pval)
+    return out

@@ -7,7 +7,9 @@ by the oracle, diagnosed by the rig, scored with gensim's scoring rules.
         --out /tmp/droopsim-s1 [--quick] [--only EFFECT] [--reuse] [--rescore RESULTS.json]
 
 Right (gensim's is_right): the verdict names the true effect; extra_lag and sensor_lag count
-as one; hysteresis is right as backlash; a pair needs both. Parameter errors and the tables
+as one; hysteresis is right as backlash; a pair needs both, unless the oracle finds one of
+its members undetectable beside the other (oracle.members): then it is scored as the single
+of the detectable one, and the whole-pair count is printed beside the headline. Parameter errors and the tables
 are gensim's (param_errors, tables), imported.
 """
 import argparse
@@ -41,9 +43,11 @@ def simulated_case(spec, d, reuse):
     cached = os.path.join(d, "oracle.json")
     if reuse and os.path.exists(cached):
         truth = json.load(open(os.path.join(d, "truth.json")))
-        if truth.get("seed") == spec["seed"] and truth.get("effect") == spec["effect"]:
+        orc = json.load(open(cached))
+        judged = "members" in orc or len(truth["truths"]) < 2
+        if truth.get("seed") == spec["seed"] and truth.get("effect") == spec["effect"] and judged:
             add_bus_frequency(spec, d)
-            return dict(truths=truth["truths"]), json.load(open(cached)), 0.0
+            return dict(truths=truth["truths"]), orc, 0.0
     case = cs.make_case(spec["id"], spec["effect"], spec["concealment"], spec["seed"])
     p, p_after, _ = oracle.plan(case)
     t0 = time.time()
@@ -93,9 +97,33 @@ def run_case(spec, rig, work, reuse=False, bus_frequency=True):
         row["places"] = [e.get("place") for e in h.get("effects", [])] if h else []
         row["param_err_pct"] = param_errors(case, rep)
         row["elapsed_s"] = rep.get("elapsed_s")
-    row["right"] = is_right(spec["effect"], row["verdict"], spec["concealment"],
-                            row.get("named", ()))
+    score(row)
     return row
+
+
+def score(row):
+    """right: gensim's is_right, except that a pair one of whose members the oracle finds
+    undetectable (oracle.members) is scored as the single of its detectable member; the
+    whole-pair rule is kept in right_whole_pair."""
+    args = (row["verdict"], row["concealment"], row.get("named", ()))
+    row["right_whole_pair"] = is_right(row["effect"], *args)
+    det = [e for e, m in row["oracle"].get("members", {}).items() if m["detectable"]]
+    single = len(det) == 1 and row["oracle"]["detectable"]
+    row["right"] = row["right_whole_pair"] or single and is_right(det[0], *args)
+    row["scored_as"] = det[0] if single else row["effect"]
+
+
+def pair_members(rows):
+    """The pairs scored on one member, and the count under the whole-pair rule."""
+    det = [r for r in rows if r["effect"] != "none" and r["oracle"]["detectable"]]
+    single = [r for r in det if r.get("scored_as", r["effect"]) != r["effect"]]
+    print("\npairs with a member the oracle finds undetectable (scored on the other): " +
+          (", ".join(f"{r['id']} {r['effect']} -> {r['scored_as']} ("
+                     + " ".join(f"{e} {m['gain']:+.1f}" for e, m in r["oracle"]["members"].items())
+                     + f") {'ok' if r['right'] else 'BAD'}" for r in single) or "none"))
+    whole = sum(r["right_whole_pair"] for r in det)
+    print(f"right where detectable with every pair needing both members: {whole}/{len(det)}")
+    return whole
 
 
 def wrong_list(rows):
@@ -133,8 +161,9 @@ def main():
     if a.rescore:
         doc = json.load(open(a.rescore))
         for r in doc["cases"]:
-            r["right"] = is_right(r["effect"], r["verdict"], r["concealment"], r.get("named", ()))
+            score(r)
         tables(doc["cases"], f"droopsim (seed {doc['seed']})")
+        pair_members(doc["cases"])
         wrong_list(doc["cases"])
         return
     specs = cs.case_list(a.seed, quick=a.quick)
@@ -161,6 +190,7 @@ def main():
               f"({r['sim_s']:.0f}+{r['rig_s']:.1f} s)", flush=True)
         rows.append(r)
     summary = tables(rows, f"droopsim (seed {a.seed})")
+    summary["right_whole_pair"] = pair_members(rows)
     wrong_list(rows)
     rs = sorted(r["rig_s"] for r in rows)
     print(f"\nrig diagnose time per case: median {rs[len(rs) // 2]:.1f} s, max {rs[-1]:.1f} s; "

@@ -1,10 +1,12 @@
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 
 #include "concealed.hpp"
 #include "rig/diagnose/augmented_model.hpp"
+#include "rig/diagnose/blocks.hpp"
 #include "rig/diagnose/effect_registry.hpp"
 #include "rig/diagnose/hypothesis_fit.hpp"
 
@@ -20,7 +22,10 @@ std::complex<double> ratio(Effect e, std::vector<double> p, double f_hz) {
 TEST(Effects, EveryWordRoundTripsAndHasParameters) {
   DataScales s;
   for (Effect e : kAllEffects) {
-    EXPECT_EQ(effect_from_string(to_string(e)), e);
+    // A word names its first form (a resonance's moved modes are a second form of it).
+    const auto back = effect_from_string(to_string(e));
+    ASSERT_TRUE(back) << to_string(e);
+    EXPECT_STREQ(to_string(*back), to_string(e));
     const auto specs = parameter_specs(e, s);
     ASSERT_FALSE(specs.empty()) << to_string(e);
     for (const auto& p : specs) EXPECT_LT(p.lo, p.hi) << to_string(e) << " " << p.name;
@@ -35,7 +40,7 @@ TEST(Effects, RegistryHoldsOneCompleteModelPerEffectInEnumOrder) {
     const EffectModel& m = *models[i];
     EXPECT_EQ(m.id, kAllEffects[i]) << m.name;
     EXPECT_EQ(&effect_model(m.id), &m) << m.name;
-    EXPECT_EQ(effect_model(std::string_view(m.name)), &m) << m.name;
+    EXPECT_STREQ(effect_model(std::string_view(m.name))->name, m.name);
     EXPECT_TRUE(m.parameter_specs && m.seeds && m.explain) << m.name;
     EXPECT_NE(std::string(m.description), "") << m.name;
     // Each kind has exactly the application it needs.
@@ -70,6 +75,39 @@ TEST(Effects, ResonanceInSeriesPeaksAtItsModeAndRollsOffAbove) {
   EXPECT_NEAR(std::abs(ratio(Effect::kResonance, mode, 4.0)), 1.0 / (2 * 0.1), 0.05 * 5.0);
   EXPECT_NEAR(std::abs(ratio(Effect::kResonance, mode, 0.05)), 1.0, 1e-3);
   EXPECT_LT(std::abs(ratio(Effect::kResonance, mode, 40.0)), 0.02);
+}
+
+TEST(Effects, MovedModesMoveTheModelsTwoModesAndKeepItsStaticGain) {
+  // A swing mode (2 Hz, damping 0.15) and a coupling mode (12 Hz, 0.2) in series.
+  const auto mode = [](double f_hz, double zeta) {
+    const double w = 2 * std::numbers::pi * f_hz;
+    return Eigen::Vector3d(1.0, 2 * zeta * w, w * w);
+  };
+  model::TransferFunction tf;
+  tf.num = Eigen::VectorXd::Constant(1, 3.0 * mode(2, 0.15)(2) * mode(12, 0.2)(2));
+  tf.den = poly_multiply(mode(2, 0.15), mode(12, 0.2));
+  ASSERT_TRUE(moved_modes_possible(tf));
+  model::TransferFunction moved = tf;
+  effect_model(Effect::kMovedModes).apply_linear(moved, {5.4, 0.1, 1.9, 0.17});
+  EXPECT_NEAR(moved.dc_gain(), 3.0, 1e-9);
+  std::vector<std::pair<double, double>> modes;  // (Hz, damping ratio), upper half-plane
+  const Eigen::VectorXcd p = moved.poles();
+  for (Eigen::Index i = 0; i < p.size(); ++i)
+    if (p(i).imag() > 0)
+      modes.emplace_back(std::abs(p(i)) / (2 * std::numbers::pi), -p(i).real() / std::abs(p(i)));
+  std::sort(modes.begin(), modes.end());
+  ASSERT_EQ(modes.size(), 2u);
+  EXPECT_NEAR(modes[0].first, 1.9, 1e-6);
+  EXPECT_NEAR(modes[0].second, 0.17, 1e-6);
+  EXPECT_NEAR(modes[1].first, 5.4, 1e-6);
+  EXPECT_NEAR(modes[1].second, 0.1, 1e-6);
+  // Far below both modes the response is the model's.
+  EXPECT_NEAR(std::abs(moved.response(0.01) / tf.response(0.01)), 1.0, 1e-3);
+  // One mode only: not a pair to move.
+  model::TransferFunction one;
+  one.num = Eigen::VectorXd::Constant(1, mode(2, 0.15)(2));
+  one.den = mode(2, 0.15);
+  EXPECT_FALSE(moved_modes_possible(one));
 }
 
 TEST(Effects, KinkChangesTheSlopeAboveTheOperatingPointOnly) {
