@@ -237,9 +237,14 @@ std::string alternative_words(const DiagnoseResult& r) {
     names += std::string(to_string(e.effect)) + place_suffix(e.place);
   }
   std::string s = fmt::format(
-      " A {} fits about as well (validation score {:.2f} against {:.2f}): this recording does "
-      "not tell the two apart.",
+      " A {} fits about as well (validation score {:.2f} against {:.2f}): this "
+      "recording does not tell the two apart.",
       names, g.score, r.chosen()->score);
+  if (const auto peak = gain_peak_tells_apart(r, *r.chosen(), g))
+    s = fmt::format(
+        " A {} scores {:.2f} against {:.2f} but leaves the gain the data show at {:.2f} Hz "
+        "({:+.1f} dB against the model, beyond its uncertainty), which the {} accounts for.",
+        names, g.score, r.chosen()->score, peak->first, peak->second, r.verdict);
   if (r.location.amp.two_level_input)
     s += " On a two-level input every step is the same size, so a deadband, a play or a slew "
          "limit in the loop acts much as a gain or a lag would; a test whose bias varies in "

@@ -122,23 +122,24 @@ bool play_beyond_lag(const DiagnoseResult& r, const HypothesisFit& h) {
 
 struct GainPeak {
   double freq_hz = 0.0;
-  double log_ratio = 0.0;  // |ln |H1 / G||
+  double log_ratio = 0.0;   // |ln |H1 / G||
+  double signed_log = 0.0;  // ln |H1 / G|
 };
 
 // The largest disagreement of gain the data show beyond their uncertainty (thresholds.hpp),
 // if any.
 std::optional<GainPeak> gain_peak(const Location& loc) {
-  double best = std::log(kGainPeakRatio), at = -1.0;
+  double best = std::log(kGainPeakRatio), at = -1.0, signed_log = 0.0;
   for (const auto& b : loc.freq.bins) {
     if (!b.significant || !(b.coherence > 0.0) || std::abs(b.model) <= 0.0) continue;
     const double m_eff = std::max(2.0, 0.75 * loc.freq.segments);
     const double rel_error = std::sqrt((1.0 - b.coherence) / (2.0 * m_eff * b.coherence));
     if (rel_error > kGainPeakRelError) continue;
-    const double dev = std::abs(std::log(std::abs(b.measured / b.model)));
-    if (dev >= best) best = dev, at = b.freq_hz;
+    const double ln = std::log(std::abs(b.measured / b.model));
+    if (std::abs(ln) >= best) best = std::abs(ln), at = b.freq_hz, signed_log = ln;
   }
   if (at < 0.0) return std::nullopt;
-  return GainPeak{at, best};
+  return GainPeak{at, best, signed_log};
 }
 
 // Whether h's own response at the peak (the measured one less that of the residual h
@@ -320,6 +321,15 @@ int account_for_gain_peak(const DiagnoseResult& r, int i, double min_gain) {
     if (accounts_for(r, g, *peak)) return static_cast<int>(j);
   }
   return i;
+}
+
+std::optional<std::pair<double, double>> gain_peak_tells_apart(const DiagnoseResult& r,
+                                                               const HypothesisFit& chosen,
+                                                               const HypothesisFit& other) {
+  const auto peak = gain_peak(r.location);
+  if (!peak || !accounts_for(r, chosen, *peak) || accounts_for(r, other, *peak))
+    return std::nullopt;
+  return std::make_pair(peak->freq_hz, 20.0 * peak->signed_log / std::log(10.0));
 }
 
 // A pair "effect + drift" whose drift alone is immaterial is reported as the effect alone

@@ -3,7 +3,9 @@
 // thresholds.hpp with its reason.
 #pragma once
 
+#include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "rig/diagnose/diagnose.hpp"
@@ -29,6 +31,12 @@ int choose(const DiagnoseResult& r, double min_gain_pct);
 // kCloseAlternativePct of the chosen one (or more, when a margin rule chose): the data do
 // not tell the two apart. -1 for none. The lag twins and a hysteresis with its play are one.
 int close_alternative(const DiagnoseResult& r);
+
+// When the data show a gain peak (verdict step 5, thresholds.hpp kGainPeakRatio) that
+// `chosen` accounts for and `other` does not: its frequency (Hz) and |H1/G| there (dB).
+std::optional<std::pair<double, double>> gain_peak_tells_apart(const DiagnoseResult& r,
+                                                               const HypothesisFit& chosen,
+                                                               const HypothesisFit& other);
 
 // The verdict word of a chosen hypothesis.
 std::string verdict_of(const HypothesisFit& h);

@@ -148,6 +148,9 @@ class DroopsimCases(unittest.TestCase):
         self.check_effect(truths, rep, ("resonance",), "freq_hz")
         h = rep["hypotheses"][rep["chosen"]]
         self.assertIn("other_freq_hz", h["effects"][0]["params"], rep["explanation"])
+        # The delay beside it is not "as good": the explanation says what told them apart.
+        self.assertNotIn("does not tell the two apart", rep["explanation"])
+        self.assertIn("which the resonance accounts for", rep["explanation"])
 
     def test_a_smoke_limiter_is_a_saturation_on_the_governors_error(self):
         self.check_effect(*self.run_case("saturation", "plain", 765153), ("saturation",),
