@@ -31,7 +31,8 @@ constexpr std::array<const EffectModel*, kAllEffects.size()> kTable = {&kDeadTim
                                                                        &kPeriodicDisturbanceEffect,
                                                                        &kDriftEffect,
                                                                        &kHysteresisEffect,
-                                                                       &kMovedModesEffect};
+                                                                       &kMovedModesEffect,
+                                                                       &kBoostLimitEffect};
 
 std::size_t index_of(Effect effect) { return static_cast<std::size_t>(effect); }
 

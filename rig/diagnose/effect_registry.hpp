@@ -123,6 +123,9 @@ struct EffectModel {
   // depend on the input's direction of motion (a play or a hysteresis loop does; with a
   // fitted place and shares it could otherwise stand in for a deadband or a gain).
   bool needs_direction_evidence = false;
+  // Whether it sits only in the governor's output stage (a limit that follows the engine's
+  // air): then it is tried only after the governor's PI (Place::kPiLoop, kGovernorPi).
+  bool governor_only = false;
   // Whether a fitted value can be a verdict (nullptr: any can): one whose shape parameter
   // stopped at its bound is the search's best stand-in for some other shape, not an estimate
   // (a resonance at its largest damping ratio is a broad reshaping of the band).

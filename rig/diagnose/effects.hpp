@@ -42,9 +42,10 @@ enum class Effect {
   kDrift,
   kHysteresis,
   kMovedModes,  // "resonance": the model's own two modes moved together (moved_modes.cpp)
+  kBoostLimit,  // "saturation": a limit that follows the engine's air (boost_limit.cpp)
 };
 
-inline constexpr std::array<Effect, 18> kAllEffects = {Effect::kDeadTime,
+inline constexpr std::array<Effect, 19> kAllEffects = {Effect::kDeadTime,
                                                        Effect::kExtraLag,
                                                        Effect::kResonance,
                                                        Effect::kAcCoupling,
@@ -61,7 +62,8 @@ inline constexpr std::array<Effect, 18> kAllEffects = {Effect::kDeadTime,
                                                        Effect::kPeriodicDisturbance,
                                                        Effect::kDrift,
                                                        Effect::kHysteresis,
-                                                       Effect::kMovedModes};
+                                                       Effect::kMovedModes,
+                                                       Effect::kBoostLimit};
 
 // DESIGN.md section 9 word ("dead_time", ...).
 const char* to_string(Effect effect);

@@ -47,6 +47,20 @@ bool pairable(const AppliedEffect& a, const AppliedEffect& b) {
   return !((error_loop(a) && loop(b)) || (error_loop(b) && loop(a)));
 }
 
+namespace {
+
+// The best fitted place of effect e that can sit beside b (singles are ranked); nullptr when
+// none can.
+const AppliedEffect* best_place_beside(const std::vector<HypothesisFit>& singles, Effect e,
+                                       const AppliedEffect& b) {
+  for (const auto& h : singles)
+    if (h.effects.size() == 1 && h.effects[0].effect == e && pairable(h.effects[0], b))
+      return &h.effects[0];
+  return nullptr;
+}
+
+}  // namespace
+
 // Whether an effect is tried at more than one place (singles below).
 bool several_places(Effect e) {
   const EffectModel& m = effect_model(e);
@@ -130,12 +144,21 @@ std::vector<Candidate> forward_pairs(const Problem& pr, const std::vector<Hypoth
     if (first == singles.end()) continue;
     const AppliedEffect& a = first->effects[0];
     const Location after_a = locate(pr, first->yhat);
-    std::vector<Effect> seen{a.effect};
+    std::vector<Effect> seen{a.effect}, best_seen{a.effect};
     for (const auto& h : singles) {  // ranked: each effect's best place that can pair with a
       if (h.effects.size() != 1 || !has_input_side(h)) continue;
       const AppliedEffect& b = h.effects[0];
-      if (std::find(seen.begin(), seen.end(), b.effect) != seen.end()) continue;
       if (twins(a.effect, b.effect)) continue;
+      // b at its best place, beside a's best place that can sit with it (a lag in the
+      // governor's loop and a play after its PI share the loop: the lag at the input then).
+      if (std::find(best_seen.begin(), best_seen.end(), b.effect) == best_seen.end()) {
+        best_seen.push_back(b.effect);
+        if (!pairable(a, b))
+          if (const AppliedEffect* a2 = best_place_beside(singles, a.effect, b))
+            if (!fitted(existing, *a2, b) && !fitted(out, *a2, b))
+              out.push_back(pair_starts(*a2, b, pr, after_a));
+      }
+      if (std::find(seen.begin(), seen.end(), b.effect) != seen.end()) continue;
       if (!pairable(a, b)) continue;  // its next place may pair (a dead time in the error loop)
       seen.push_back(b.effect);
       if (fitted(existing, a, b) || fitted(out, a, b)) continue;

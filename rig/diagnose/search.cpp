@@ -39,6 +39,7 @@ std::vector<Candidate> singles_of(Effect e, const Problem& pr, const Location& l
     if (place == Place::kFeedback && !effect_model(e).in_feedback) continue;
     if (on_error(place) && !effect_model(e).apply_on_error) continue;
     if (after_pi(place) && !effect_model(e).step) continue;
+    if (effect_model(e).governor_only && !after_pi(place)) continue;
     if (feedback_fitted(place) && !governor_loop_possible(pr.tf)) continue;
     // On a two-level input any map of the bias itself acts as a linear one: a static map
     // as a gain and an offset, a play or a slew limit the same on every (equal) step.
@@ -214,6 +215,23 @@ std::vector<HypothesisFit> blind_search(const Problem& pr, const Location& loc,
   return search_singles(pr, loc, base, o, true);
 }
 
+namespace {
+
+// The location's direction test shows a play beyond any lag (thresholds.hpp,
+// kDirectionBeyondLagZ) that the best single, without a play or a hysteresis loop, does not
+// hold: its residual may pass the cross-correlation, the play's pair with it is still
+// searched (droopsim s2 d074: a transducer's lag and a linkage play, the lag in the loop
+// alone explaining the correlation).
+bool leaves_play(const HypothesisFit& best, const Location& loc) {
+  const bool has_play = std::any_of(best.effects.begin(), best.effects.end(), [](const auto& e) {
+    return effect_model(e.effect).needs_direction_evidence;
+  });
+  return !has_play && !loc.amp.two_level_input &&
+         loc.amp.direction_beyond_lag_z <= -thresholds::kDirectionBeyondLagZ;
+}
+
+}  // namespace
+
 std::vector<HypothesisFit> search_hypotheses(const Problem& pr, const Location& loc,
                                              const Eigen::VectorXd& base,
                                              const DiagnoseOptions& o) {
@@ -229,7 +247,9 @@ std::vector<HypothesisFit> search_hypotheses(const Problem& pr, const Location& 
   // Input tests passed: the pairs with the disturbance are the only ones.
   if (auto behind = behind_disturbance(pr, loc, hs, base, o); !behind.empty())
     return done(std::move(behind));
-  if (!o.try_pairs || hs.empty() || explains(pr, hs.front(), loc)) return done({});
+  if (!o.try_pairs || hs.empty() ||
+      (explains(pr, hs.front(), loc) && !leaves_play(hs.front(), loc)))
+    return done({});
   const std::vector<Candidate> paired = pair_candidates(pr, hs);
   std::vector<HypothesisFit> pairs = fit_all(pr, paired, base, o);
   std::vector<Candidate> tried = paired;

@@ -31,6 +31,7 @@ extern const EffectModel kGainChangeEffect;
 extern const EffectModel kPeriodicDisturbanceEffect;
 extern const EffectModel kDriftEffect;
 extern const EffectModel kMovedModesEffect;
+extern const EffectModel kBoostLimitEffect;
 
 namespace effects {
 

@@ -96,6 +96,8 @@ std::vector<double> true_params(Effect e, const DataScales& s, const model::Tran
       return {0.3 * su, 0.0, 1.0, -1.0};  // a play-type loop: v = u - z
     case Effect::kMovedModes:             // a second form of resonance: its cases are resonance's
       return {};
+    case Effect::kBoostLimit:  // a second form of saturation: its cases are saturation's
+      return {};
   }
   return {};
 }

@@ -182,3 +182,38 @@ TEST(Effects, ARunawayResidualLeavesTheFitWithAFiniteResult) {
 
 }  // namespace
 }  // namespace rig::diagnose
+
+namespace rig::diagnose {
+namespace {
+
+// The boost limiter (saturation's second form) stepped through a record at 50 Hz.
+Eigen::VectorXd boost_limited(const Eigen::VectorXd& x, const Params& p) {
+  Problem pr;
+  pr.dt_s = 0.02;
+  return effect_model(Effect::kBoostLimit).apply_input(pr, p, x);
+}
+
+TEST(Effects, BoostLimitCutsAFastRiseAndLetsASlowOneThrough) {
+  const EffectModel& m = effect_model(Effect::kBoostLimit);
+  EXPECT_STREQ(m.name, "saturation");
+  EXPECT_TRUE(m.governor_only);
+  const Params follows = {1.0, 1.0, 1.0};  // +1 above 1.0 x the demand through a 1 s lag
+  // A step of 3 at once: cut to the limit at first, through once the air has caught up.
+  Eigen::VectorXd step = Eigen::VectorXd::Constant(1000, 3.0);
+  step.head(100).setZero();
+  const Eigen::VectorXd cut = boost_limited(step, follows);
+  EXPECT_DOUBLE_EQ(cut(100), 1.0);
+  EXPECT_LT(cut(150), 2.0);
+  EXPECT_NEAR(cut(999), 3.0, 1e-9);
+  // The same rise over 20 s (0.15 per s, 0.15 ahead of its 1 s lag): never cut.
+  const Eigen::VectorXd ramp = Eigen::VectorXd::LinSpaced(1000, 0.0, 19.98)
+                                   .cwiseProduct(Eigen::VectorXd::Constant(1000, 0.15));
+  EXPECT_LT((boost_limited(ramp, follows) - ramp).cwiseAbs().maxCoeff(), 1e-12);
+  // Without the following, a fixed upper limit: the ramp is cut at 1 for good.
+  const Eigen::VectorXd fixed = boost_limited(ramp, {1.0, 0.0, 1.0});
+  EXPECT_DOUBLE_EQ(fixed.maxCoeff(), 1.0);
+  EXPECT_DOUBLE_EQ(fixed(999), 1.0);
+}
+
+}  // namespace
+}  // namespace rig::diagnose
