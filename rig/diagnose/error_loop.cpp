@@ -16,38 +16,33 @@ constexpr int kSameSamplePasses = 3;
 
 }  // namespace
 
-Eigen::VectorXd close_error_loop(const model::TransferFunction& tf_in, const Eigen::VectorXd& u,
-                                 const Eigen::VectorXd& z0, double g0, double dt_s,
-                                 const std::function<double(std::span<const double>)>& on_error,
-                                 const LoopFeedback* feedback) {
-  const model::TransferFunction tf = model::monic(tf_in);
-  const Eigen::Index n = tf.den.size() - 1, samples = u.size();
-  Eigen::VectorXd b = Eigen::VectorXd::Zero(n + 1);
-  b.tail(tf.num.size()) = tf.num;
-  const double delay_samples = tf.delay_s / dt_s;
-  const auto whole = static_cast<Eigen::Index>(std::floor(delay_samples + 1e-12));
-  double frac = delay_samples - static_cast<double>(whole);
-  if (frac < 1e-9) frac = 0.0;
-  // Controllable form as model::filtered_derivatives: x = [p^{n-1} w .. w], w = ud / A(p).
-  Eigen::MatrixXd a = Eigen::MatrixXd::Zero(n, n);
-  if (n > 0) a.row(0) = -tf.den.tail(n).transpose();
-  for (Eigen::Index i = 1; i < n; ++i) a(i, i - 1) = 1.0;
-  Eigen::VectorXd bin = Eigen::VectorXd::Zero(n);
-  if (n > 0) bin(0) = 1.0;
-  const model::FohStep hold = n > 0 ? model::foh_step(a, bin, dt_s) : model::FohStep{};
-  // The step as plain arrays (row-major phi): the state is small, and a general
-  // matrix-vector product per sample costs more than the arithmetic.
-  const auto nn = static_cast<std::size_t>(n);
-  std::vector<double> phi(nn * nn), ga(nn), gb(nn), top_row(nn), out_row(nn);
-  for (std::size_t i = 0; i < nn; ++i) {
-    const auto ii = static_cast<Eigen::Index>(i);
-    for (std::size_t j = 0; j < nn; ++j)
-      phi[i * nn + j] = hold.phi(ii, static_cast<Eigen::Index>(j));
-    ga[i] = hold.ga(ii);
-    gb[i] = hold.gb(ii);
-    top_row[i] = a(0, ii);
-    out_row[i] = b(ii + 1);
-  }
+namespace {
+
+// What the sample loop needs of the linear part: the hold's step of the controllable form
+// (x = [p^{n-1} w .. w], w = ud / A(p), as model::filtered_derivatives) and the output's rows.
+struct LoopStep {
+  Eigen::MatrixXd phi;
+  Eigen::VectorXd ga, gb, top_row, out_row;
+  double b0 = 0.0;
+  Eigen::Index whole = 0;  // the dead time's whole samples
+  double frac = 0.0;       // and its fraction of one
+};
+
+// The sample loop for a state of N entries (compile-time, or Eigen::Dynamic): fixed sizes let
+// the n x n product unroll, as model::simulate's does. The correction G d at sample k is
+// affine in the delayed d there (only the hold's slope into it depends on it), so the state's
+// part that does not is stepped once per sample and each pass solving d_k costs O(1).
+template <int N>
+Eigen::VectorXd run_error_loop(const LoopStep& m, const Eigen::VectorXd& u,
+                               const Eigen::VectorXd& z0, double g0, double dt_s,
+                               const std::function<double(std::span<const double>)>& on_error,
+                               const LoopFeedback* feedback) {
+  using Vec = Eigen::Matrix<double, N, 1>;
+  const Eigen::Matrix<double, N, N> phi = m.phi;
+  const Vec ga = m.ga, gb = m.gb, top_row = m.top_row, out_row = m.out_row;
+  const double top_gb = top_row.dot(gb), out_gb = out_row.dot(gb);
+  const Eigen::Index samples = u.size(), whole = m.whole;
+  const double frac = m.frac;
   std::vector<double> d(static_cast<std::size_t>(samples), 0.0), es(d.size(), 0.0);
   auto d_at = [&](Eigen::Index j) { return j >= 0 ? d[static_cast<std::size_t>(j)] : 0.0; };
   // The delayed d (0 before it starts, as model::filtered_derivatives has it).
@@ -55,46 +50,84 @@ Eigen::VectorXd close_error_loop(const model::TransferFunction& tf_in, const Eig
     if (k - whole < 0 || (frac > 0.0 && k - whole - 1 < 0)) return 0.0;
     return (1.0 - frac) * d_at(k - whole) + frac * d_at(k - whole - 1);
   };
-  std::vector<double> x(nn, 0.0), x_prev(nn, 0.0);
+  Vec x = Vec::Zero(m.phi.rows()), base = x;
   Eigen::VectorXd y(samples);
   std::optional<FeedbackFilter> seen;
   if (feedback) seen.emplace(*feedback, dt_s);
   double ud_prev = 0.0;
   for (Eigen::Index k = 0; k < samples; ++k) {
-    // The state at k and the correction G d there, for the d_k guessed so far.
-    auto correction = [&]() {
+    // x = base + gb v_end / dt: the part of the step that does not depend on d_k.
+    if (k > 0) base = phi.lazyProduct(x) + ga * ud_prev - gb * (ud_prev / dt_s);
+    const double top_base = top_row.dot(base), out_base = out_row.dot(base);
+    // With a whole-sample dead time the delayed d jumps at it: the step into it holds 0.
+    const auto v_end = [&](double v) { return (frac == 0.0 && k - whole <= 0) ? 0.0 : v; };
+    const auto correction = [&]() {
       const double v = ud(k);
-      // With a whole-sample dead time the delayed d jumps at it: the step into it holds 0.
-      const double v_end = (frac == 0.0 && k - whole <= 0) ? 0.0 : v;
-      if (k > 0) {
-        const double slope = (v_end - ud_prev) / dt_s;
-        for (std::size_t i = 0; i < nn; ++i) {
-          double s = ga[i] * ud_prev + gb[i] * slope;
-          const double* row = &phi[i * nn];
-          for (std::size_t j = 0; j < nn; ++j) s += row[j] * x_prev[j];
-          x[i] = s;
-        }
-      }
-      double top = v, out = 0.0;
-      for (std::size_t i = 0; i < nn; ++i) top += top_row[i] * x[i], out += out_row[i] * x[i];
-      return b(0) * top + out;
+      if (k == 0) return m.b0 * v;  // the state starts at zero
+      const double r = v_end(v) / dt_s;
+      return m.b0 * (v + top_base + top_gb * r) + out_base + out_gb * r;
     };
     const int passes = whole == 0 ? kSameSamplePasses : 1;
     double c = 0.0;
-    d[static_cast<std::size_t>(k)] = d_at(k - 1);
+    const auto i = static_cast<std::size_t>(k);
+    d[i] = d_at(k - 1);
     for (int pass = 0; pass < passes; ++pass) {
       c = correction();
-      const auto i = static_cast<std::size_t>(k);
       es[i] = seen ? u(k) - seen->at((z0(k) - c) / g0) : u(k) - (z0(k) - c) / g0;
       d[i] = es[i] - on_error(std::span<const double>(es.data(), i + 1));
     }
     if (whole == 0) c = correction();
     y(k) = z0(k) - c;
     if (seen) seen->advance(y(k) / g0);
-    x_prev = x;
+    if (k > 0) x = base + gb * (v_end(ud(k)) / dt_s);
     ud_prev = ud(k);
   }
   return y;
+}
+
+inline constexpr int kMaxFixedOrder = 14;  // as model::simulate's
+
+template <int N>
+Eigen::VectorXd run_sized(const LoopStep& m, const Eigen::VectorXd& u, const Eigen::VectorXd& z0,
+                          double g0, double dt_s,
+                          const std::function<double(std::span<const double>)>& on_error,
+                          const LoopFeedback* feedback) {
+  if constexpr (N > kMaxFixedOrder) {
+    return run_error_loop<Eigen::Dynamic>(m, u, z0, g0, dt_s, on_error, feedback);
+  } else {
+    if (m.phi.rows() == N) return run_error_loop<N>(m, u, z0, g0, dt_s, on_error, feedback);
+    return run_sized<N + 1>(m, u, z0, g0, dt_s, on_error, feedback);
+  }
+}
+
+}  // namespace
+
+Eigen::VectorXd close_error_loop(const model::TransferFunction& tf_in, const Eigen::VectorXd& u,
+                                 const Eigen::VectorXd& z0, double g0, double dt_s,
+                                 const std::function<double(std::span<const double>)>& on_error,
+                                 const LoopFeedback* feedback) {
+  const model::TransferFunction tf = model::monic(tf_in);
+  const Eigen::Index n = tf.den.size() - 1;
+  Eigen::VectorXd b = Eigen::VectorXd::Zero(n + 1);
+  b.tail(tf.num.size()) = tf.num;
+  LoopStep m;
+  const double delay_samples = tf.delay_s / dt_s;
+  m.whole = static_cast<Eigen::Index>(std::floor(delay_samples + 1e-12));
+  m.frac = delay_samples - static_cast<double>(m.whole);
+  if (m.frac < 1e-9) m.frac = 0.0;
+  Eigen::MatrixXd a = Eigen::MatrixXd::Zero(n, n);
+  if (n > 0) a.row(0) = -tf.den.tail(n).transpose();
+  for (Eigen::Index i = 1; i < n; ++i) a(i, i - 1) = 1.0;
+  Eigen::VectorXd bin = Eigen::VectorXd::Zero(n);
+  if (n > 0) bin(0) = 1.0;
+  const model::FohStep hold = n > 0 ? model::foh_step(a, bin, dt_s) : model::FohStep{};
+  m.phi = n > 0 ? hold.phi : Eigen::MatrixXd(0, 0);
+  m.ga = n > 0 ? hold.ga : Eigen::VectorXd(0);
+  m.gb = n > 0 ? hold.gb : Eigen::VectorXd(0);
+  m.top_row = n > 0 ? Eigen::VectorXd(a.row(0).transpose()) : Eigen::VectorXd(0);
+  m.out_row = b.tail(n);
+  m.b0 = b(0);
+  return run_sized<0>(m, u, z0, g0, dt_s, on_error, feedback);
 }
 
 namespace {

@@ -18,8 +18,16 @@ AcCoupler::AcCoupler(double dt_s, double rc_s) {
 }
 
 Eigen::VectorXd AcCoupler::process(const Eigen::VectorXd& x) {
+  // step() on locals: the state kept in registers, not reloaded past each store to v.
   Eigen::VectorXd v(x.size());
-  for (Eigen::Index i = 0; i < x.size(); ++i) v[i] = step(x[i]);
+  const double a = a_;
+  double x_prev = x_prev_, out = v_;
+  for (Eigen::Index i = 0; i < x.size(); ++i) {
+    out = a * out + x[i] - x_prev;
+    x_prev = x[i];
+    v[i] = out;
+  }
+  x_prev_ = x_prev, v_ = out;
   return v;
 }
 
