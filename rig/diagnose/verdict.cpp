@@ -20,6 +20,7 @@ using thresholds::kDriftMaterialOfLevel;
 using thresholds::kGainPeakRatio;
 using thresholds::kGainPeakRelError;
 using thresholds::kGainPeakTakenShare;
+using thresholds::kLagOverDelayMarginPct;
 using thresholds::kNestedMarginPct;
 using thresholds::kNonlinearOverLinearPct;
 using thresholds::kOperatingLevelStds;
@@ -323,6 +324,24 @@ int account_for_gain_peak(const DiagnoseResult& r, int i, double min_gain) {
   return i;
 }
 
+// A single lag that does not beat the transport delay at its place by the margin
+// (thresholds.hpp, kLagOverDelayMarginPct) is that delay.
+int prefer_delay_to_lag(const DiagnoseResult& r, int i, double min_gain) {
+  const auto& h = r.hypotheses[static_cast<std::size_t>(i)];
+  if (h.effects.size() != 1 || h.effects[0].effect != Effect::kExtraLag) return i;
+  for (std::size_t j = 0; j < r.hypotheses.size(); ++j) {  // ranked: the first is the best
+    const auto& g = r.hypotheses[j];
+    if (g.effects.size() != 1 || g.effects[0].effect != Effect::kDeadTime ||
+        g.effects[0].place != h.effects[0].place)
+      continue;
+    const bool named = g.score >= std::max(min_gain, h.score - kLagOverDelayMarginPct) &&
+                       could_be_verdict(g, r.location, r.problem.scales) &&
+                       !sampling_convention_only(g, r.problem);
+    return named ? static_cast<int>(j) : i;
+  }
+  return i;
+}
+
 std::optional<std::pair<double, double>> gain_peak_tells_apart(const DiagnoseResult& r,
                                                                const HypothesisFit& chosen,
                                                                const HypothesisFit& other) {
@@ -357,6 +376,7 @@ int choose(const DiagnoseResult& r, double min_gain) {
     if (j >= 0 && at(j).score >= at(i).score - kNonlinearOverLinearPct) i = j;
   }
   i = account_for_gain_peak(r, i, min_gain);
+  i = prefer_delay_to_lag(r, i, min_gain);
   const auto& h = r.hypotheses[static_cast<std::size_t>(i)];
   if (h.effects.size() != 2 || h.effects[1].effect != Effect::kDrift) return i;
   bool drift_immaterial = false;

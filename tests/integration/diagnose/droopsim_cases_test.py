@@ -36,6 +36,8 @@ judged against droopsim's own truth.
     (benchmark seed 2 d028, named `static_nonlinearity` before the following form);
   * a transducer's lag with a linkage play (d074, named `extra_lag` in the governor's loop
     before): the lag at the input and `backlash` after the PI, both within 20 %;
+  * an injection delay from 100 s (benchmark seed 3 d002, named `extra_lag` in the loop
+    before, 0.003 points over the delay): `dead_time` at `governor_loop` within 20 %;
   * a transducer's gain change from 100 s behind the grid's wander (benchmark seed 2 d017,
     named `drift` before): `gain_change` from the level step on, the change (1 - ratio)
     within 20 %;
@@ -132,6 +134,12 @@ class DroopsimCases(unittest.TestCase):
 
     def test_an_injection_delay_inside_the_speed_loop_is_a_dead_time_there(self):
         self.check_effect(*self.run_case("dead_time", "plain", 903395), ("dead_time",),
+                          "extra_delay_s", place="governor_loop")
+
+    def test_a_fuel_delay_from_100_s_is_a_dead_time_not_a_lag(self):
+        # Benchmark seed 3 d002: the lag in the loop scored 0.003 points over the delay there
+        # and was named; a lag must now beat the delay at its place by the margin.
+        self.check_effect(*self.run_case("dead_time", "late", 583024), ("dead_time",),
                           "extra_delay_s", place="governor_loop")
 
     def test_a_plain_play_shown_beyond_a_lag_is_a_backlash(self):

@@ -294,6 +294,36 @@ TEST(Verdict, ALevelStepThatTheDynamicsGainMatchesIsAGainChange) {
   EXPECT_EQ(choose(r, thresholds::kMinGainPct), 1);
 }
 
+// A lag inside the governor's loop that does not beat the transport delay there by the
+// margin is the delay: the two agree to first order (droopsim seed 3 d002, an injection delay
+// of 20 ms from 100 s: the lag 0.003 points over the delay, named `extra_lag`).
+TEST(Verdict, ALagNoBetterThanADelayAtItsPlaceIsTheDelay) {
+  DiagnoseResult r;
+  r.problem.y = white(1000, 10.0, 31);
+  r.problem.dt_s = 0.02;
+  r.problem.scales.z_std = 10.0;
+  r.location.input_mismatch = true;
+  const auto hypothesis = [](Effect e, double value, std::vector<double> loop, double score) {
+    HypothesisFit h;
+    h.effects = {AppliedEffect{e, {value}, Place::kGovernorLoop, std::move(loop)}};
+    h.score = score;
+    h.validation_fit_before = 76.3;
+    h.validation_fit_after = 76.3 + score;
+    return h;
+  };
+  r.hypotheses = {hypothesis(Effect::kExtraLag, 0.0222, {0.088, 0.077, 0.005}, 9.114),
+                  hypothesis(Effect::kDeadTime, 0.0220, {-0.261, 0.076, 0.042}, 9.111)};
+  EXPECT_EQ(choose(r, thresholds::kMinGainPct), 1);
+  // A lag that beats it by more (droopsim's combustion lags: 0.14 points or more) stays.
+  r.hypotheses[0].score = 9.111 + 0.14;
+  EXPECT_EQ(choose(r, thresholds::kMinGainPct), 0);
+  // A delay at another place is no twin.
+  r.hypotheses[0].score = 9.114;
+  r.hypotheses[1].effects[0].place = Place::kInput;
+  r.hypotheses[1].effects[0].place_params = {};
+  EXPECT_EQ(choose(r, thresholds::kMinGainPct), 0);
+}
+
 // A line behind a larger wander is fitted beside it: a torque ripple behind the grid's
 // wander (gensim seed 3 g062) was named `drift`, the line's single fitted without the drift.
 TEST(Verdict, ALineBehindAWanderIsFittedBesideIt) {
