@@ -32,7 +32,8 @@ constexpr std::array<const EffectModel*, kAllEffects.size()> kTable = {&kDeadTim
                                                                        &kDriftEffect,
                                                                        &kHysteresisEffect,
                                                                        &kMovedModesEffect,
-                                                                       &kBoostLimitEffect};
+                                                                       &kBoostLimitEffect,
+                                                                       &kCurvatureEffect};
 
 std::size_t index_of(Effect effect) { return static_cast<std::size_t>(effect); }
 

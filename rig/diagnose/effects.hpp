@@ -43,9 +43,10 @@ enum class Effect {
   kHysteresis,
   kMovedModes,  // "resonance": the model's own two modes moved together (moved_modes.cpp)
   kBoostLimit,  // "saturation": a limit that follows the engine's air (boost_limit.cpp)
+  kCurvature,   // "static_nonlinearity": its one-parameter form, a curvature (curvature.cpp)
 };
 
-inline constexpr std::array<Effect, 19> kAllEffects = {Effect::kDeadTime,
+inline constexpr std::array<Effect, 20> kAllEffects = {Effect::kDeadTime,
                                                        Effect::kExtraLag,
                                                        Effect::kResonance,
                                                        Effect::kAcCoupling,
@@ -63,7 +64,8 @@ inline constexpr std::array<Effect, 19> kAllEffects = {Effect::kDeadTime,
                                                        Effect::kDrift,
                                                        Effect::kHysteresis,
                                                        Effect::kMovedModes,
-                                                       Effect::kBoostLimit};
+                                                       Effect::kBoostLimit,
+                                                       Effect::kCurvature};
 
 // DESIGN.md section 9 word ("dead_time", ...).
 const char* to_string(Effect effect);

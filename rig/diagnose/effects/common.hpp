@@ -32,6 +32,7 @@ extern const EffectModel kPeriodicDisturbanceEffect;
 extern const EffectModel kDriftEffect;
 extern const EffectModel kMovedModesEffect;
 extern const EffectModel kBoostLimitEffect;
+extern const EffectModel kCurvatureEffect;
 
 namespace effects {
 

@@ -52,7 +52,8 @@ int main(int argc, char** argv) {
   }
   std::vector<std::optional<Effect>> effects = {std::nullopt};
   for (Effect e : kAllEffects)  // the moved modes are a second form of resonance, not a case
-    if (e != Effect::kMovedModes && e != Effect::kBoostLimit) effects.push_back(e);
+    if (e != Effect::kMovedModes && e != Effect::kBoostLimit && e != Effect::kCurvature)
+      effects.push_back(e);
   const Concealment cons[] = {Concealment::kNoise, Concealment::kDrift, Concealment::kAcCoupling,
                               Concealment::kPartial};
   std::vector<Row> rows;

@@ -98,6 +98,8 @@ std::vector<double> true_params(Effect e, const DataScales& s, const model::Tran
       return {};
     case Effect::kBoostLimit:  // a second form of saturation: its cases are saturation's
       return {};
+    case Effect::kCurvature:  // a second form of static_nonlinearity: its cases are that's
+      return {};
   }
   return {};
 }
