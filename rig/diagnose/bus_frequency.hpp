@@ -26,7 +26,12 @@ struct BusFrequencyShare {
   double frequency_rms_hz = 0.0;  // the frequency's wander about its mean
   double share_rms = 0.0;         // the output's share taken out, output units
   double residual_share = 0.0;    // its share of the baseline residual's variance (0-1)
-  std::string note;               // one line for the report
+  // A grid event: where the share steps (find_level_shift, split.hpp), -1 without one, and
+  // the step (the share's mean after it less its mean before, output units): the set's
+  // operating point moved there.
+  Eigen::Index event_at = -1;
+  double event_step = 0.0;
+  std::string note;  // one line for the report
 };
 
 // Fits the grid's share to input.y - the model's output (with its coupling) and, when the

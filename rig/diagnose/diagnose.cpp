@@ -115,8 +115,11 @@ DiagnoseResult diagnose(const DiagnoseInput& in, const DiagnoseOptions& o) {
   // clip, the blind search's best): not material.
   if (!r.location.input_mismatch && !r.chosen()) {
     r.verdict = "none";
+  } else if (r.chosen()) {
+    r.verdict = verdict_of(*r.chosen());
   } else {
-    r.verdict = r.chosen() ? verdict_of(*r.chosen()) : "unexplained";
+    r.operating_point_move = operating_point_moved(r);
+    r.verdict = r.operating_point_move ? "none" : "unexplained";
   }
   r.alternative_index = close_alternative(r);
   r.explanation = explain(r);

@@ -40,6 +40,16 @@ struct DiagnoseOptions {
   std::vector<Effect> effects;  // empty: the whole library
 };
 
+// A grid event that moved the set's operating point, the residual correlated with the input
+// on one side of it only (verdict.cpp operating_point_moved).
+struct OperatingPointMove {
+  double event_s = 0.0;
+  double step = 0.0;            // the grid's share's step there, output units
+  bool dependent_after = true;  // the side whose residual is correlated with the input
+  double cross_ratio = 0.0;     // that side's, of the 99 % bound
+  double cross_threshold = 0.0;
+};
+
 struct DiagnoseResult {
   std::string verdict;                    // an effect word, "none" or "unexplained"
   std::vector<HypothesisFit> hypotheses;  // ranked by score
@@ -50,6 +60,7 @@ struct DiagnoseResult {
   std::optional<double> level_shift_time_s;        // an operating-point step (split.hpp), if any
   double level_shift = 0.0;                        // its size, output units
   std::optional<BusFrequencyShare> bus_frequency;  // when the recording carried one
+  std::optional<OperatingPointMove> operating_point_move;  // behind a `none` verdict
   double timing_nuisance_s = 0.0;  // the dead time shift within +-dt/2 absorbed (timing.hpp)
   double fit_before_pct = 0.0;     // whole record after the warm-up
   double validation_fit_before_pct = 0.0;

@@ -262,10 +262,29 @@ std::string bus_frequency_words(const DiagnoseResult& r) {
                          n.substr(1) + ". ";
 }
 
+// A `none` behind a grid event that moved the operating point (operating_point.cpp).
+std::string operating_point_words(const DiagnoseResult& r) {
+  const OperatingPointMove& m = *r.operating_point_move;
+  std::string s = fmt::format(
+      "The grid's event at {:.1f} s moved the set's operating point by {:.3g} output units. The "
+      "model explains the recording on one side of it; {} it the residual is correlated with "
+      "the input (peak {:.2f} times the 99 % bound, threshold {:.2f}) and no other test fails",
+      m.event_s, m.step, m.dependent_after ? "after" : "before", m.cross_ratio, m.cross_threshold);
+  if (!r.hypotheses.empty())
+    s += fmt::format(" (the best effect, {}, changes the validation fit from {:.1f} % to {:.1f} %)",
+                     r.hypotheses.front().name(), r.hypotheses.front().validation_fit_before,
+                     r.hypotheses.front().validation_fit_after);
+  return s +
+         ": a set's small-signal answer follows its operating point (a curved fuel map inside the "
+         "speed loop), so the change is the operating point's, not a missing effect.";
+}
+
 }  // namespace
 
 std::string explain(const DiagnoseResult& r) {
   const auto& t = r.location.tests;
+  if (r.verdict == "none" && r.operating_point_move)
+    return bus_frequency_words(r) + level_shift_words(r) + operating_point_words(r);
   if (r.verdict == "none")
     return bus_frequency_words(r) + level_shift_words(r) + clip_words(r) +
            fmt::format(

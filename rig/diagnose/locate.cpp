@@ -135,6 +135,11 @@ void look_behind_drift(const Problem& pr, const Eigen::VectorXd& r, const Eigen:
 
 }  // namespace
 
+Eigen::Index residual_test_lags(const Problem& pr, const Location& loc) {
+  const double band = std::max(loc.freq.input_band_hz, 1.0 / pr.scales.duration_s);
+  return std::clamp<Eigen::Index>(std::llround(2.0 / (band * pr.dt_s)), 25, 200);
+}
+
 Location locate(const Problem& pr, const Eigen::VectorXd& yhat) {
   Location loc;
   const Eigen::VectorXd r = pr.y - yhat;
@@ -143,8 +148,7 @@ Location locate(const Problem& pr, const Eigen::VectorXd& yhat) {
   loc.amp = locate_amplitude(pr, r, yhat);
   Eigen::Index from = 0;
   while (from < r.size() && pr.est_weight(from) + pr.val_weight(from) <= 0.0) ++from;
-  const double band = std::max(loc.freq.input_band_hz, 1.0 / pr.scales.duration_s);
-  const auto lags = std::clamp<Eigen::Index>(std::llround(2.0 / (band * pr.dt_s)), 25, 200);
+  const Eigen::Index lags = residual_test_lags(pr, loc);
   loc.tests = residual_tests(r.tail(r.size() - from), pr.u.tail(r.size() - from), pr.dt_s, lags);
   test_halves(pr, r, from, lags, loc);
   loc.dist = locate_disturbances(pr, r, loc.freq);

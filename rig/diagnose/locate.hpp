@@ -141,6 +141,8 @@ double drift_smooth_s(const Problem& pr);
 Disturbances locate_disturbances(const Problem& pr, const Eigen::VectorXd& residual,
                                  const FrequencyLocation& freq);
 Location locate(const Problem& pr, const Eigen::VectorXd& baseline_yhat);
+// The lags of the residual's cross-correlation test: two periods of the input's band.
+Eigen::Index residual_test_lags(const Problem& pr, const Location& loc);
 // The step-gain test at Problem::level_step_removed_at (untested without one).
 StepGain locate_step_gain(const Problem& pr, const Eigen::VectorXd& residual,
                           const Eigen::VectorXd& yhat, double level_ratio);

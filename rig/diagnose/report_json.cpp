@@ -69,6 +69,10 @@ json bus_frequency_json(const DiagnoseResult& r) {
           {"frequency_rms_hz", b.frequency_rms_hz},
           {"share_rms", b.share_rms},
           {"residual_share", b.residual_share},
+          {"event_s",
+           b.event_at > 0 ? json(static_cast<double>(b.event_at) * r.problem.dt_s) : json(nullptr)},
+          {"event_step", b.event_step},
+          {"operating_point_move", r.operating_point_move.has_value()},
           {"note", b.note}};
 }
 

@@ -38,6 +38,11 @@ std::optional<std::pair<double, double>> gain_peak_tells_apart(const DiagnoseRes
                                                                const HypothesisFit& chosen,
                                                                const HypothesisFit& other);
 
+// When nothing is chosen although the input tests failed: a grid event that moved the
+// operating point with the residual correlated with the input on one side of it only, and
+// no other test failing (operating_point.cpp), if that is what the record shows.
+std::optional<OperatingPointMove> operating_point_moved(const DiagnoseResult& r);
+
 // The verdict word of a chosen hypothesis.
 std::string verdict_of(const HypothesisFit& h);
 

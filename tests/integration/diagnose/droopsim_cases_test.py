@@ -34,6 +34,11 @@ judged against droopsim's own truth.
     `static_nonlinearity` before the limit was tried in the governor's loop, then a fixed
     limit on its error), its upper limit within 20 %; the same behind a grid event
     (benchmark seed 2 d028, named `static_nonlinearity` before the following form);
+  * a curved fuel map behind three times the noise (d046) and from 100 s (d047):
+    `static_nonlinearity` in its one-parameter form, a curvature (`unexplained` before: the
+    full map's cubic and kink cost more than they bought);
+  * a null behind a grid event (d084): `none`, the operating point moved by the event and the
+    residual correlated with the bias after it only (`unexplained` before);
   * a transducer's lag with a linkage play (d074, named `extra_lag` in the governor's loop
     before): the lag at the input and `backlash` after the PI, both within 20 %;
   * an injection delay from 100 s (benchmark seed 3 d002, named `extra_lag` in the loop
@@ -125,6 +130,21 @@ class DroopsimCases(unittest.TestCase):
         self.assertNotEqual(rep["verdict"], "none", rep["explanation"])
         self.assertIsNone(rep["bus_frequency"])
 
+    def test_a_null_behind_a_grid_event_is_none_the_operating_point_moved(self):
+        # Benchmark seed 1 d084: a 46 mHz fall of the grid's frequency at 59.8 s moves the
+        # set's operating point along its curved fuel map; after it the residual correlates
+        # with the bias, which no effect explains (`unexplained` before).
+        _, rep = self.run_case("none", "load_step", 353423)
+        self.assertEqual(rep["verdict"], "none", rep["explanation"])
+        bf = rep["bus_frequency"]
+        print(f"  event at {bf['event_s']:.1f} s, step {bf['event_step']:.1f} kW", flush=True)
+        self.assertTrue(bf["operating_point_move"], rep["explanation"])
+        self.assertAlmostEqual(bf["event_s"], 59.8, delta=3.0)
+        self.assertGreater(bf["event_step"], 0.0)  # the frequency fell: the set took load
+        self.assertIn("after it the residual is correlated", rep["explanation"])
+        # The cross-correlation over the whole record still fails: the rule is what names it.
+        self.assertFalse(rep["location"]["residual_tests"]["independent"])
+
     def test_a_combustion_lag_inside_the_speed_loop_is_a_lag_there(self):
         self.check_lag(*self.run_case("extra_lag", "plain", 187690), place="governor_loop")
 
@@ -163,6 +183,24 @@ class DroopsimCases(unittest.TestCase):
         # The delay beside it is not "as good": the explanation says what told them apart.
         self.assertNotIn("does not tell the two apart", rep["explanation"])
         self.assertIn("which the resonance accounts for", rep["explanation"])
+
+    def check_curvature(self, rep):
+        self.assertEqual(rep["verdict"], "static_nonlinearity", rep["explanation"])
+        h = rep["hypotheses"][rep["chosen"]]
+        p = h["effects"][0]["params"]
+        print(f"  {p} at {h['effects'][0]['place']}", flush=True)
+        self.assertEqual(list(p), ["quadratic_rel"])  # the one-parameter form
+        self.assertGreater(p["quadratic_rel"], 0.0)  # droopsim's curvature bends the map up
+        self.assertGreater(h["validation_fit_after"], h["validation_fit_before"])
+
+    def test_a_curved_fuel_map_behind_3x_the_noise_is_a_static_nonlinearity(self):
+        # Benchmark seed 1 d046 (`unexplained` before): the full map (curvature, cubic, kink)
+        # fitted 0.9 points, under its three parameters' penalty.
+        self.check_curvature(self.run_case("static_nonlinearity", "noisy", 441285)[1])
+
+    def test_a_curved_fuel_map_from_100_s_is_a_static_nonlinearity(self):
+        # Benchmark seed 1 d047 (`unexplained` before).
+        self.check_curvature(self.run_case("static_nonlinearity", "late", 108525)[1])
 
     def check_smoke_limiter(self, truths, rep):
         # After the governor's PI, its limit rising with the air (saturation's second form).

@@ -1,0 +1,44 @@
+// A grid event that moved the set's operating point (docs/diagnose.md, verdict step 6).
+//
+// A set in droop answers a step of the grid's frequency by stepping its power, and a fuel
+// map is curved: at the new operating point the slope inside the speed loop, and with it the
+// set's answer to the bias, is not the one the model was identified at. On droopsim a 46 mHz
+// event changed that answer by 3.7 % after it (docs/droopsim.md, "The grid event's null").
+// When the residual is correlated with the input on one side of the event only, every other
+// test passes and no effect of the library explains it, the recording is the model's at one
+// operating point and a different, equally linear answer at the other: no missing effect.
+#include <Eigen/Core>
+#include <optional>
+
+#include "rig/diagnose/diagnose.hpp"
+#include "rig/diagnose/locate.hpp"
+#include "rig/diagnose/verdict.hpp"
+
+namespace rig::diagnose {
+
+std::optional<OperatingPointMove> operating_point_moved(const DiagnoseResult& r) {
+  if (!r.bus_frequency || r.bus_frequency->event_at <= 0) return std::nullopt;
+  const Location& loc = r.location;
+  if (loc.freq.band_hz || loc.amp.amplitude_dependent || loc.amp.sign_dependent ||
+      loc.amp.direction_dependent || loc.step_gain.fires || r.location.clip.side != 0)
+    return std::nullopt;
+  const Problem& pr = r.problem;
+  if (r.baseline_yhat.size() != pr.y.size()) return std::nullopt;
+  const Eigen::VectorXd res = pr.y - r.baseline_yhat;
+  const Eigen::Index n = res.size(), at = r.bus_frequency->event_at;
+  Eigen::Index from = 0;
+  while (from < n && pr.est_weight(from) + pr.val_weight(from) <= 0.0) ++from;
+  const Eigen::Index lags = residual_test_lags(pr, loc);
+  // Each side long enough for the test's lags, as each half of the record (locate.cpp).
+  if (at - from < 4 * lags || n - at < 4 * lags) return std::nullopt;
+  const ResidualTests before = residual_tests(res.segment(from, at - from),
+                                              pr.u.segment(from, at - from), pr.dt_s, lags, 2.0);
+  const ResidualTests after =
+      residual_tests(res.tail(n - at), pr.u.tail(n - at), pr.dt_s, lags, 2.0);
+  if (before.independent == after.independent) return std::nullopt;
+  const ResidualTests& dependent = after.independent ? before : after;
+  return OperatingPointMove{static_cast<double>(at) * pr.dt_s, r.bus_frequency->event_step,
+                            !after.independent, dependent.cross_ratio, dependent.cross_threshold};
+}
+
+}  // namespace rig::diagnose
