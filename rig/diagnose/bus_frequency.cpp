@@ -149,7 +149,7 @@ BusFrequencyShare take_out_bus_frequency(DiagnoseInput& in, const Eigen::VectorX
   };
   const double vr = variance(residual);
   s.residual_share = vr > 0.0 ? std::max(0.0, 1.0 - variance(residual - share) / vr) : 0.0;
-  if ((s.event_at = find_level_shift(pr, share)) > 0) {
+  if ((s.event_at = find_level_shift(pr, share, thresholds::kGridEventSpreads)) > 0) {
     const Eigen::Index n = share.size(), at = s.event_at;
     s.event_step = share.tail(n - at).mean() - share.head(at).mean();
   }

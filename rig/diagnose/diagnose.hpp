@@ -41,12 +41,14 @@ struct DiagnoseOptions {
 };
 
 // A grid event that moved the set's operating point, the residual correlated with the input
-// on one side of it only (verdict.cpp operating_point_moved).
+// on one side of it at most (operating_point.cpp operating_point_moved).
 struct OperatingPointMove {
   double event_s = 0.0;
-  double step = 0.0;            // the grid's share's step there, output units
-  bool dependent_after = true;  // the side whose residual is correlated with the input
-  double cross_ratio = 0.0;     // that side's, of the 99 % bound
+  double step = 0.0;               // the grid's share's step there, output units
+  bool dependent_after = true;     // the side whose residual is correlated with the input (or
+                                   // nearer to it, when neither side is)
+  bool one_side_dependent = true;  // false: correlated over the whole record only
+  double cross_ratio = 0.0;        // that side's, of the 99 % bound
   double cross_threshold = 0.0;
 };
 

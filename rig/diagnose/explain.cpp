@@ -265,11 +265,22 @@ std::string bus_frequency_words(const DiagnoseResult& r) {
 // A `none` behind a grid event that moved the operating point (operating_point.cpp).
 std::string operating_point_words(const DiagnoseResult& r) {
   const OperatingPointMove& m = *r.operating_point_move;
+  const auto& t = r.location.tests;
   std::string s = fmt::format(
-      "The grid's event at {:.1f} s moved the set's operating point by {:.3g} output units. The "
-      "model explains the recording on one side of it; {} it the residual is correlated with "
-      "the input (peak {:.2f} times the 99 % bound, threshold {:.2f}) and no other test fails",
-      m.event_s, m.step, m.dependent_after ? "after" : "before", m.cross_ratio, m.cross_threshold);
+      "The grid's event at {:.1f} s moved the set's operating point by {:.3g} output units. ",
+      m.event_s, m.step);
+  if (m.one_side_dependent)
+    s += fmt::format(
+        "The model explains the recording on one side of it; {} it the residual is correlated "
+        "with the input (peak {:.2f} times the 99 % bound, threshold {:.2f} for either side)",
+        m.dependent_after ? "after" : "before", m.cross_ratio, m.cross_threshold);
+  else
+    s += fmt::format(
+        "The residual is correlated with the input over the whole record (peak {:.2f} times the "
+        "99 % bound, threshold {:.2f}) but on neither side of the event alone (at most {:.2f}, "
+        "threshold {:.2f}): each side is a linear answer of its own",
+        t.cross_ratio, t.cross_threshold, m.cross_ratio, m.cross_threshold);
+  s += "; no other test fails";
   if (!r.hypotheses.empty())
     s += fmt::format(" (the best effect, {}, changes the validation fit from {:.1f} % to {:.1f} %)",
                      r.hypotheses.front().name(), r.hypotheses.front().validation_fit_before,

@@ -6,7 +6,6 @@
 namespace rig::diagnose {
 
 using thresholds::kLevelShiftOfOutputStd;
-using thresholds::kLevelShiftSpreads;
 using thresholds::kOnsetHypotheses;
 using thresholds::kOnsetMinT;
 using thresholds::kOnsetQuietFraction;
@@ -68,7 +67,7 @@ ChangePoint change_point(const Problem& pr, const Eigen::VectorXd& base,
 
 }  // namespace
 
-Eigen::Index find_level_shift(const Problem& pr, const Eigen::VectorXd& r) {
+Eigen::Index find_level_shift(const Problem& pr, const Eigen::VectorXd& r, double spreads) {
   const Eigen::Index n = r.size();
   const Eigen::Index w = std::max<Eigen::Index>(100, std::llround(2.0 / pr.dt_s));
   if (n < 8 * w) return -1;
@@ -91,8 +90,7 @@ Eigen::Index find_level_shift(const Problem& pr, const Eigen::VectorXd& r) {
   const double spread = 1.4826 * median(v);
   Eigen::Index best = 0;
   const double peak = (d.array() - med).abs().maxCoeff(&best);
-  if (spread <= 0.0 || peak < kLevelShiftSpreads * spread ||
-      peak < kLevelShiftOfOutputStd * pr.scales.z_std)
+  if (spread <= 0.0 || peak < spreads * spread || peak < kLevelShiftOfOutputStd * pr.scales.z_std)
     return -1;
   return best + w;
 }

@@ -4,6 +4,7 @@
 #include <vector>
 
 #include "rig/diagnose/diagnose.hpp"
+#include "rig/diagnose/thresholds.hpp"
 
 namespace rig::diagnose {
 
@@ -32,7 +33,10 @@ void refine_onsets(const Problem& problem, std::vector<HypothesisFit>& hypothese
 // against its robust spread over the record (1.4826 x the median absolute deviation): a
 // step is where |d_k| exceeds 10 spreads and half the model output's std. Drift and noise
 // move d_k smoothly and everywhere; a step only near one k. Returns the sample, or -1.
-Eigen::Index find_level_shift(const Problem& problem, const Eigen::VectorXd& residual);
+// spreads: the robust spreads of the window differences a step must exceed
+// (thresholds.hpp kLevelShiftSpreads; a grid event in the grid's share, kGridEventSpreads).
+Eigen::Index find_level_shift(const Problem& problem, const Eigen::VectorXd& residual,
+                              double spreads = thresholds::kLevelShiftSpreads);
 
 // extra_lag and sensor_lag act alike on the input; a sensor lag also filters the noise.
 // The residual after the lag is fitted tells them apart: its PSD above 2 fc over its PSD

@@ -241,6 +241,12 @@ inline constexpr double kStepOnsetMarginPct = 2 * kPenaltyPctPerParameter;
 inline constexpr double kLevelShiftSpreads = 10.0;
 // ... and this fraction of the model output's std: large against the input-driven response.
 inline constexpr double kLevelShiftOfOutputStd = 0.5;
+// A grid event (bus_frequency.hpp) is such a step of the grid's share at this many spreads:
+// the share is the frequency through a few lags, with no effect's slow part in it, only the
+// wander's. On droopsim seeds 1-3 the frequency's 2 s window differences reached 2.2-4.5
+// robust spreads on the 33 records with the wander alone (3x the wander, or the nuisances),
+// 3.9-11.9 at events of 20-50 mHz; 6 keeps every wander out and the events above 25 mHz in.
+inline constexpr double kGridEventSpreads = 6.0;
 // The step-gain test (locate.hpp StepGain): the gain after a level step differs from before
 // it by more than this many standard deviations (the sign and direction tests' bound) ...
 inline constexpr double kStepGainZ = 5.0;
