@@ -6,6 +6,7 @@
 #include <limits>
 #include <numbers>
 #include <stdexcept>
+#include <tuple>
 
 #include "rig/diagnose/blocks.hpp"
 #include "rig/diagnose/effect_registry.hpp"
@@ -145,6 +146,8 @@ void finish_problem(Problem& pr) {
   s.z_rate_std =
       n > 1 ? std_of((pr.baseline_z.tail(n - 1) - pr.baseline_z.head(n - 1)) / pr.dt_s) : 1.0;
   s.delay_s = pr.tf.delay_s;
+  if (const auto modes = movable_modes_hz(pr.tf))
+    std::tie(s.moved_mode_hz, s.pulled_mode_hz) = *modes;
   s.dc_gain = pr.tf.dc_gain();
   if (!std::isfinite(s.dc_gain) || std::abs(s.dc_gain) < 1e-12) {
     double peak = 0.0;

@@ -76,6 +76,8 @@ std::optional<std::pair<double, double>> dominant_mode(const model::TransferFunc
 // Whether tf has two lightly damped modes apart for the moved-modes form of a resonance
 // (effects/moved_modes.cpp).
 bool moved_modes_possible(const model::TransferFunction& tf);
+// Those two modes' frequencies (Hz): the one the form moves, the one it pulls along.
+std::optional<std::pair<double, double>> movable_modes_hz(const model::TransferFunction& tf);
 // The moved mode's relative change of frequency (|freq_hz - f0| / f0; infinite without one).
 double moved_mode_shift(const model::TransferFunction& tf, double freq_hz);
 

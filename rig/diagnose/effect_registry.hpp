@@ -123,6 +123,10 @@ struct EffectModel {
   // depend on the input's direction of motion (a play or a hysteresis loop does; with a
   // fitted place and shares it could otherwise stand in for a deadband or a gain).
   bool needs_direction_evidence = false;
+  // Whether it is a static map of the signal's level (a deadband, a limit, a curved or kinked
+  // map): the level test's evidence (the gain depends on the input's amplitude, which no
+  // linear effect does) lets it be the verdict without the margin over a linear effect.
+  bool level_shaped = false;
   // Whether it sits only in the governor's output stage (a limit that follows the engine's
   // air): then it is tried only after the governor's PI (Place::kPiLoop, kGovernorPi).
   bool governor_only = false;

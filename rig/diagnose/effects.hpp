@@ -93,6 +93,10 @@ struct DataScales {
   double z_peak_ratio = 3.0;  // max |z - mean| over its standard deviation (crest factor)
   double dc_gain = 1.0;       // the baseline's static gain (its peak gain when not finite)
   double delay_s = 0.0;       // the baseline's dead time
+  // The baseline's two lightly damped modes that the moved-modes form of a resonance moves
+  // (effects/moved_modes.cpp): the one it moves and the one it pulls along; 0: none.
+  double moved_mode_hz = 0.0;
+  double pulled_mode_hz = 0.0;
 };
 
 std::vector<ParamSpec> parameter_specs(Effect effect, const DataScales& scales);

@@ -121,6 +121,20 @@ bool play_beyond_lag(const DiagnoseResult& r, const HypothesisFit& h) {
          -kDirectionBeyondLagZ;
 }
 
+// Every nonlinearity of h is a static map of the level (EffectModel::level_shaped) and the
+// location's level test saw the gain depend on the input's amplitude (chi^2(4) at 1e-4,
+// locate_time_amplitude.cpp): what no gain, lag or delay does, so such a map needs no margin
+// over them (droopsim seed 4 d034, a speed-error deadband behind the grid's wander, level
+// chi^2 40.7: the deadband scored 0.69 points over a gain change with a delay).
+bool level_evidenced(const HypothesisFit& h, const Location& loc) {
+  if (!loc.amp.amplitude_dependent || loc.amp.two_level_input) return false;
+  return std::all_of(h.effects.begin(), h.effects.end(), [](const AppliedEffect& e) {
+    const EffectKind k = kind_of(e.effect);
+    return (k != EffectKind::kInputNonlinearity && k != EffectKind::kFeedback) ||
+           effect_model(e.effect).level_shaped;
+  });
+}
+
 struct GainPeak {
   double freq_hz = 0.0;
   double log_ratio = 0.0;   // |ln |H1 / G||
@@ -324,19 +338,30 @@ int account_for_gain_peak(const DiagnoseResult& r, int i, double min_gain) {
   return i;
 }
 
-// A single lag that does not beat the transport delay at its place by the margin
-// (thresholds.hpp, kLagOverDelayMarginPct) is that delay.
+// A lag that does not beat the transport delay at its place by the margin (thresholds.hpp,
+// kLagOverDelayMarginPct) is that delay: alone, or beside the same other effect (a drift).
 int prefer_delay_to_lag(const DiagnoseResult& r, int i, double min_gain) {
   const auto& h = r.hypotheses[static_cast<std::size_t>(i)];
-  if (h.effects.size() != 1 || h.effects[0].effect != Effect::kExtraLag) return i;
+  const auto lag = std::find_if(h.effects.begin(), h.effects.end(), [](const AppliedEffect& e) {
+    return e.effect == Effect::kExtraLag;
+  });
+  if (lag == h.effects.end() || h.effects.size() > 2) return i;
+  const auto delay_for_lag = [&](const AppliedEffect& a, const AppliedEffect& b) {
+    return &a == &*lag ? b.effect == Effect::kDeadTime && b.place == a.place
+                       : b.effect == a.effect && b.place == a.place;
+  };
   for (std::size_t j = 0; j < r.hypotheses.size(); ++j) {  // ranked: the first is the best
     const auto& g = r.hypotheses[j];
-    if (g.effects.size() != 1 || g.effects[0].effect != Effect::kDeadTime ||
-        g.effects[0].place != h.effects[0].place)
-      continue;
+    if (g.effects.size() != h.effects.size()) continue;
+    const bool match = h.effects.size() == 1 ? delay_for_lag(h.effects[0], g.effects[0])
+                                             : (delay_for_lag(h.effects[0], g.effects[0]) &&
+                                                delay_for_lag(h.effects[1], g.effects[1])) ||
+                                                   (delay_for_lag(h.effects[0], g.effects[1]) &&
+                                                    delay_for_lag(h.effects[1], g.effects[0]));
+    if (!match) continue;
     const bool named = g.score >= std::max(min_gain, h.score - kLagOverDelayMarginPct) &&
                        could_be_verdict(g, r.location, r.problem.scales) &&
-                       !sampling_convention_only(g, r.problem);
+                       !sampling_convention_only(g, r.problem) && pair_adds(r.hypotheses, g);
     return named ? static_cast<int>(j) : i;
   }
   return i;
@@ -351,9 +376,29 @@ std::optional<std::pair<double, double>> gain_peak_tells_apart(const DiagnoseRes
   return std::make_pair(peak->freq_hz, 20.0 * peak->signed_log / std::log(10.0));
 }
 
+namespace {
+
 // A pair "effect + drift" whose drift alone is immaterial is reported as the effect alone
 // when that single scores min_gain too: the augmented model should not carry the set's
 // normal wander as a change.
+int without_immaterial_drift(const DiagnoseResult& r, int i, double min_gain) {
+  const auto& h = r.hypotheses[static_cast<std::size_t>(i)];
+  if (h.effects.size() != 2 || h.effects[1].effect != Effect::kDrift) return i;
+  bool drift_immaterial = false;
+  int single = -1;
+  for (std::size_t j = 0; j < r.hypotheses.size(); ++j) {
+    const auto& g = r.hypotheses[j];
+    if (g.effects.size() != 1) continue;
+    if (g.effects[0].effect == Effect::kDrift) drift_immaterial = immaterial_drift(g, r.problem);
+    if (single < 0 && g.effects[0].effect == h.effects[0].effect &&
+        g.effects[0].place == h.effects[0].place && g.score >= min_gain)
+      single = static_cast<int>(j);  // the same effect at the same place
+  }
+  return drift_immaterial && single >= 0 ? single : i;
+}
+
+}  // namespace
+
 int choose(const DiagnoseResult& r, double min_gain) {
   if (const int j = step_gain_choice(r, min_gain); j >= 0) return j;
   int i = choose_raw(r, min_gain);
@@ -370,26 +415,15 @@ int choose(const DiagnoseResult& r, double min_gain) {
       i = j;
   }
   // A nonlinearity must beat the best linear explanation by a margin (thresholds.hpp),
-  // unless it is a play the data show beyond a lag.
-  if (has_nonlinearity(at(i)) && !(has_direction_effect(at(i)) && play_beyond_lag(r, at(i)))) {
+  // unless it is a play the data show beyond a lag, or a static map of the level where the
+  // level test showed the gain depend on the input's amplitude.
+  if (has_nonlinearity(at(i)) && !(has_direction_effect(at(i)) && play_beyond_lag(r, at(i))) &&
+      !level_evidenced(at(i), r.location)) {
     const int j = choose_raw(r, min_gain, Only::kLinear);
     if (j >= 0 && at(j).score >= at(i).score - kNonlinearOverLinearPct) i = j;
   }
   i = account_for_gain_peak(r, i, min_gain);
-  i = prefer_delay_to_lag(r, i, min_gain);
-  const auto& h = r.hypotheses[static_cast<std::size_t>(i)];
-  if (h.effects.size() != 2 || h.effects[1].effect != Effect::kDrift) return i;
-  bool drift_immaterial = false;
-  int single = -1;
-  for (std::size_t j = 0; j < r.hypotheses.size(); ++j) {
-    const auto& g = r.hypotheses[j];
-    if (g.effects.size() != 1) continue;
-    if (g.effects[0].effect == Effect::kDrift) drift_immaterial = immaterial_drift(g, r.problem);
-    if (single < 0 && g.effects[0].effect == h.effects[0].effect &&
-        g.effects[0].place == h.effects[0].place && g.score >= min_gain)
-      single = static_cast<int>(j);  // the same effect at the same place
-  }
-  return drift_immaterial && single >= 0 ? single : i;
+  return prefer_delay_to_lag(r, without_immaterial_drift(r, i, min_gain), min_gain);
 }
 
 int close_alternative(const DiagnoseResult& r) {

@@ -96,6 +96,7 @@ const EffectModel kBoostLimitEffect{
     .step = step,
     .explain = meaning,
     .map_to_plant = to_plant,
+    .level_shaped = true,
     .governor_only = true,
 };
 

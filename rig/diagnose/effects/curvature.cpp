@@ -55,6 +55,7 @@ const EffectModel kCurvatureEffect{
     .apply_on_error = apply_on_error,
     .step = step,
     .explain = meaning,
+    .level_shaped = true,
 };
 
 }  // namespace rig::diagnose

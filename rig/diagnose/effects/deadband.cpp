@@ -72,6 +72,7 @@ const EffectModel kDeadbandEffect{
     .step = step,
     .explain = meaning,
     .map_to_plant = to_plant,
+    .level_shaped = true,
 };
 
 }  // namespace rig::diagnose

@@ -106,12 +106,25 @@ void apply(model::TransferFunction& tf, const Params& p) {
   move(tf, a, {effects::kTwoPi * p[2], p[3]});
 }
 
+// A stiffness change moves every natural frequency of an undamped chain of masses the same
+// way (Rayleigh: all down for a softer shaft, all up for a stiffer one). The damping and the
+// governor's loop shift the damped modes a little on their own: the pulled mode moving
+// against the moved one by more than this fraction of its frequency is no stiffness change.
+// On droopsim seeds 1-5 and gensim seed 1 every softened coupling pulled the swing mode the
+// same way (2.0-8.5 % down); damper windings from 100 s (seed 4 d057) "moved" the
+// coupling's mode down to 8.9 Hz and the swing mode 5.5 % up, and were named a resonance.
+constexpr double kAgainstStiffness = 0.02;
+
 // A moved mode whose damping ratio stopped at its bound is the search's stand-in for a broader
 // reshaping of the band (as a resonance's, resonance.cpp): droopsim's damper windings behind
 // the grid's wander fitted the swing mode re-damped and the coupling's mode "moved" to 9.4 Hz
-// at damping 0.4.
-bool credible(const AppliedEffect& e, const DataScales&) {
-  return e.params.size() > 1 && e.params[1] < kAtDampingBound;
+// at damping 0.4. Nor are two modes that moved against each other (kAgainstStiffness).
+bool credible(const AppliedEffect& e, const DataScales& s) {
+  if (e.params.size() < 3 || !(e.params[1] < kAtDampingBound)) return false;
+  if (!(s.moved_mode_hz > 0.0 && s.pulled_mode_hz > 0.0)) return true;
+  const double moved = e.params[0] - s.moved_mode_hz;
+  const double pulled = e.params[2] - s.pulled_mode_hz;
+  return moved * pulled >= 0.0 || std::abs(pulled) <= kAgainstStiffness * s.pulled_mode_hz;
 }
 
 std::string meaning(const AppliedEffect& e, const HypothesisFit&, const Problem& pr) {
@@ -129,6 +142,12 @@ std::string meaning(const AppliedEffect& e, const HypothesisFit&, const Problem&
 }  // namespace
 
 bool moved_modes_possible(const model::TransferFunction& tf) { return two_modes(tf).has_value(); }
+
+std::optional<std::pair<double, double>> movable_modes_hz(const model::TransferFunction& tf) {
+  const auto modes = two_modes(tf);
+  if (!modes) return std::nullopt;
+  return std::make_pair(modes->second.hz(), modes->first.hz());
+}
 
 double moved_mode_shift(const model::TransferFunction& tf, double freq_hz) {
   const auto modes = two_modes(tf);

@@ -109,6 +109,7 @@ const EffectModel kSaturationEffect{
     .step = step,
     .explain = meaning,
     .map_to_plant = to_plant,
+    .level_shaped = true,
     .credible = credible,
 };
 

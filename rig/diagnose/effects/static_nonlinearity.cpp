@@ -67,6 +67,7 @@ const EffectModel kStaticNonlinearityEffect{
     .apply_on_error = apply_on_error,
     .step = step,
     .explain = meaning,
+    .level_shaped = true,
 };
 
 }  // namespace rig::diagnose

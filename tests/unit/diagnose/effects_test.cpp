@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <tuple>
 
 #include "concealed.hpp"
 #include "rig/diagnose/augmented_model.hpp"
@@ -108,6 +109,38 @@ TEST(Effects, MovedModesMoveTheModelsTwoModesAndKeepItsStaticGain) {
   one.num = Eigen::VectorXd::Constant(1, mode(2, 0.15)(2));
   one.den = mode(2, 0.15);
   EXPECT_FALSE(moved_modes_possible(one));
+}
+
+// A stiffness change moves both modes the same way (Rayleigh): the pulled mode moving
+// against the moved one by more than 2 % of its frequency is not credible (droopsim seed 4
+// d057: damper windings fitted as the coupling's mode down to 8.9 Hz, the swing mode 5.5 %
+// up). The scales carry the model's two modes.
+TEST(Effects, MovedModesThatMoveAgainstEachOtherAreNoStiffnessChange) {
+  const auto mode = [](double f_hz, double zeta) {
+    const double w = 2 * std::numbers::pi * f_hz;
+    return Eigen::Vector3d(1.0, 2 * zeta * w, w * w);
+  };
+  model::TransferFunction tf;
+  tf.num = Eigen::VectorXd::Constant(1, mode(2, 0.15)(2) * mode(12, 0.2)(2));
+  tf.den = poly_multiply(mode(2, 0.15), mode(12, 0.2));
+  const auto modes = movable_modes_hz(tf);
+  ASSERT_TRUE(modes);
+  EXPECT_NEAR(modes->first, 12.0, 1e-6);
+  EXPECT_NEAR(modes->second, 2.0, 1e-6);
+  DataScales scales;
+  std::tie(scales.moved_mode_hz, scales.pulled_mode_hz) = *modes;
+  const auto credible = [&](std::vector<double> p) {
+    return effect_model(Effect::kMovedModes).credible({Effect::kMovedModes, std::move(p)}, scales);
+  };
+  EXPECT_TRUE(credible({5.4, 0.1, 1.9, 0.17}));     // softer: both down
+  EXPECT_TRUE(credible({15.0, 0.2, 2.1, 0.15}));    // stiffer: both up
+  EXPECT_TRUE(credible({8.9, 0.1, 2.03, 0.25}));    // the swing mode 1.5 % up: within
+  EXPECT_FALSE(credible({8.9, 0.1, 2.11, 0.25}));   // 5.5 % up as the other went down
+  EXPECT_FALSE(credible({15.0, 0.2, 1.9, 0.15}));   // up against down
+  EXPECT_FALSE(credible({5.4, 0.395, 1.9, 0.17}));  // the damping at its bound
+  // Without the model's modes only the damping bound is checked.
+  scales = DataScales{};
+  EXPECT_TRUE(credible({8.9, 0.1, 2.11, 0.25}));
 }
 
 TEST(Effects, KinkChangesTheSlopeAboveTheOperatingPointOnly) {

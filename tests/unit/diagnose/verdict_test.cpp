@@ -454,5 +454,59 @@ TEST(Verdict, ADisturbanceAloneDoesNotExplainAnAmplitudeFinding) {
   EXPECT_TRUE(explains(pr, pair, found));  // the input side is there to explain it
 }
 
+// A static map of the level needs no margin over a linear effect when the level test saw the
+// gain depend on the input's amplitude, which no gain, lag or delay does (droopsim seed 4
+// d034, a speed-error deadband behind the grid's wander, level chi^2 40.7: the deadband
+// scored 0.69 points over a gain change with a delay, named `gain_change`).
+TEST(Verdict, ALevelMapShownByTheLevelTestIsNamedWithoutTheMargin) {
+  const auto choice = [](bool level_dependent, bool two_level, Effect map) {
+    const AppliedEffect gain{Effect::kGainChange, {0.78}};
+    const AppliedEffect delay{Effect::kDeadTime, {0.009}, Place::kError};
+    DiagnoseResult r = ranked({{{{map, {0.27}}}, 14.31}, {{gain, delay}, 13.62}, {{gain}, 12.0}});
+    r.location.amp.amplitude_dependent = level_dependent;
+    r.location.amp.two_level_input = two_level;
+    r.location.amp.direction_z = -10.0;  // a play's evidence, not beyond a lag
+    return verdict_of(r.hypotheses[static_cast<std::size_t>(choose(r, 0.2))]);
+  };
+  EXPECT_EQ(choice(true, false, Effect::kDeadband), "deadband");
+  EXPECT_EQ(choice(false, false, Effect::kDeadband), "gain_change");  // the margin holds
+  // On a two-level input the level test sees a linear change as well.
+  EXPECT_EQ(choice(true, true, Effect::kDeadband), "gain_change");
+  // A play is no map of the level: its evidence is the direction test's.
+  EXPECT_EQ(choice(true, false, Effect::kBacklash), "gain_change");
+}
+
+// The delay rule holds beside a drift too, and after an immaterial drift is dropped from the
+// choice (droopsim seed 4 d002, an injection delay from 100 s behind the grid's wander: the
+// lag in the loop 0.01 points over the delay there, named `extra_lag`).
+TEST(Verdict, ALagNoBetterThanADelayBesideADriftIsTheDelay) {
+  const AppliedEffect drift{Effect::kDrift, {5.0}};
+  const std::vector<double> loop{0.088, 0.077, 0.005};
+  const AppliedEffect lag{Effect::kExtraLag, {0.0107}, Place::kGovernorLoop, loop};
+  const AppliedEffect delay{Effect::kDeadTime, {0.0109}, Place::kGovernorLoop, loop};
+  DiagnoseResult r = ranked({{{lag, drift}, 3.55},
+                             {{delay, drift}, 3.54},
+                             {{lag}, 1.70},
+                             {{delay}, 1.69},
+                             {{drift}, 1.48}});
+  r.problem.dt_s = 0.02;
+  r.problem.y = white(1000, 10.0, 37);
+  r.problem.y_level = 1750.0;
+  r.problem.scales.z_std = 10.0;
+  auto& drift_alone = r.hypotheses[4];
+  drift_alone.derived = {{"drift_rms", 5.0}, {"drift_rms_worst_half", 5.0}};  // material
+  const auto chosen = [&r] { return r.hypotheses[static_cast<std::size_t>(choose(r, 0.2))]; };
+  EXPECT_EQ(verdict_of(chosen()), "dead_time");
+  EXPECT_EQ(chosen().effects.size(), 2u);
+  // An immaterial drift (under 0.2 % of the level): the single, and the delay again.
+  drift_alone.derived = {{"drift_rms", 1.0}, {"drift_rms_worst_half", 1.2}};
+  EXPECT_EQ(verdict_of(chosen()), "dead_time");
+  EXPECT_EQ(chosen().effects.size(), 1u);
+  // A lag that beats the delay by more than the margin stays.
+  drift_alone.derived = {{"drift_rms", 5.0}, {"drift_rms_worst_half", 5.0}};
+  r.hypotheses[0].score = 3.54 + 0.14;
+  EXPECT_EQ(verdict_of(chosen()), "extra_lag");
+}
+
 }  // namespace
 }  // namespace rig::diagnose
