@@ -122,12 +122,16 @@ bool play_beyond_lag(const DiagnoseResult& r, const HypothesisFit& h) {
 }
 
 // Every nonlinearity of h is a static map of the level (EffectModel::level_shaped) and the
-// location's level test saw the gain depend on the input's amplitude (chi^2(4) at 1e-4,
-// locate_time_amplitude.cpp): what no gain, lag or delay does, so such a map needs no margin
-// over them (droopsim seed 4 d034, a speed-error deadband behind the grid's wander, level
-// chi^2 40.7: the deadband scored 0.69 points over a gain change with a delay).
+// location's level test saw the gain depend on the input's amplitude (thresholds.hpp
+// kLevelEvidenceChi2, and the gains' spread): what no gain, lag or delay does, so such a map
+// needs no margin over them (droopsim seed 4 d034, a speed-error deadband behind the grid's
+// wander, level chi^2 40.7: the deadband scored 0.69 points over a gain change with a delay).
 bool level_evidenced(const HypothesisFit& h, const Location& loc) {
-  if (!loc.amp.amplitude_dependent || loc.amp.two_level_input) return false;
+  const auto& by_level = loc.amp.by_level;
+  if (loc.amp.two_level_input || by_level.size() < 2 ||
+      loc.amp.level_chi2 <= thresholds::kLevelEvidenceChi2 ||
+      std::abs(by_level.back().gain - by_level.front().gain) <= thresholds::kAmplitudeMinSpread)
+    return false;
   return std::all_of(h.effects.begin(), h.effects.end(), [](const AppliedEffect& e) {
     const EffectKind k = kind_of(e.effect);
     return (k != EffectKind::kInputNonlinearity && k != EffectKind::kFeedback) ||

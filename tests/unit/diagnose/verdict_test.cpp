@@ -459,21 +459,27 @@ TEST(Verdict, ADisturbanceAloneDoesNotExplainAnAmplitudeFinding) {
 // d034, a speed-error deadband behind the grid's wander, level chi^2 40.7: the deadband
 // scored 0.69 points over a gain change with a delay, named `gain_change`).
 TEST(Verdict, ALevelMapShownByTheLevelTestIsNamedWithoutTheMargin) {
-  const auto choice = [](bool level_dependent, bool two_level, Effect map) {
+  const auto choice = [](double level_chi2, double spread, bool two_level, Effect map) {
     const AppliedEffect gain{Effect::kGainChange, {0.78}};
     const AppliedEffect delay{Effect::kDeadTime, {0.009}, Place::kError};
     DiagnoseResult r = ranked({{{{map, {0.27}}}, 14.31}, {{gain, delay}, 13.62}, {{gain}, 12.0}});
-    r.location.amp.amplitude_dependent = level_dependent;
+    r.location.amp.level_chi2 = level_chi2;
+    r.location.amp.by_level = {{0.14, 0.8 - spread, 0.1}, {0.7, 0.7, 0.05}, {1.8, 0.8, 0.02}};
     r.location.amp.two_level_input = two_level;
     r.location.amp.direction_z = -10.0;  // a play's evidence, not beyond a lag
     return verdict_of(r.hypotheses[static_cast<std::size_t>(choose(r, 0.2))]);
   };
-  EXPECT_EQ(choice(true, false, Effect::kDeadband), "deadband");
-  EXPECT_EQ(choice(false, false, Effect::kDeadband), "gain_change");  // the margin holds
+  EXPECT_EQ(choice(40.7, 0.3, false, Effect::kDeadband), "deadband");
+  // At 1 %: above 13.28 (chi^2(4)), the test's evidence; below, the margin holds.
+  EXPECT_EQ(choice(13.5, 0.3, false, Effect::kDeadband), "deadband");
+  EXPECT_EQ(choice(13.0, 0.3, false, Effect::kDeadband), "gain_change");
+  // Gains that hardly differ between the lowest and highest levels are no evidence.
+  EXPECT_EQ(choice(40.7, 0.01, false, Effect::kDeadband), "gain_change");
   // On a two-level input the level test sees a linear change as well.
-  EXPECT_EQ(choice(true, true, Effect::kDeadband), "gain_change");
+  EXPECT_EQ(choice(40.7, 0.3, true, Effect::kDeadband), "gain_change");
   // A play is no map of the level: its evidence is the direction test's.
-  EXPECT_EQ(choice(true, false, Effect::kBacklash), "gain_change");
+  EXPECT_EQ(choice(40.7, 0.3, false, Effect::kBacklash), "gain_change");
+  EXPECT_EQ(choice(40.7, 0.3, false, Effect::kSaturation), "saturation");
 }
 
 // The delay rule holds beside a drift too, and after an immaterial drift is dropped from the
