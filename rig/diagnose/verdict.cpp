@@ -6,6 +6,7 @@
 #include <optional>
 
 #include "rig/diagnose/effect_registry.hpp"
+#include "rig/diagnose/gain_peak.hpp"
 #include "rig/diagnose/placement.hpp"
 
 namespace rig::diagnose {
@@ -17,9 +18,6 @@ using thresholds::kDirectionEvidenceZ;
 using thresholds::kDriftMaterialFraction;
 using thresholds::kDriftMaterialGainPct;
 using thresholds::kDriftMaterialOfLevel;
-using thresholds::kGainPeakRatio;
-using thresholds::kGainPeakRelError;
-using thresholds::kGainPeakTakenShare;
 using thresholds::kLagOverDelayMarginPct;
 using thresholds::kNestedMarginPct;
 using thresholds::kNonlinearOverLinearPct;
@@ -137,44 +135,6 @@ bool level_evidenced(const HypothesisFit& h, const Location& loc) {
     return (k != EffectKind::kInputNonlinearity && k != EffectKind::kFeedback) ||
            effect_model(e.effect).level_shaped;
   });
-}
-
-struct GainPeak {
-  double freq_hz = 0.0;
-  double log_ratio = 0.0;   // |ln |H1 / G||
-  double signed_log = 0.0;  // ln |H1 / G|
-};
-
-// The largest disagreement of gain the data show beyond their uncertainty (thresholds.hpp),
-// if any.
-std::optional<GainPeak> gain_peak(const Location& loc) {
-  double best = std::log(kGainPeakRatio), at = -1.0, signed_log = 0.0;
-  for (const auto& b : loc.freq.bins) {
-    if (!b.significant || !(b.coherence > 0.0) || std::abs(b.model) <= 0.0) continue;
-    const double m_eff = std::max(2.0, 0.75 * loc.freq.segments);
-    const double rel_error = std::sqrt((1.0 - b.coherence) / (2.0 * m_eff * b.coherence));
-    if (rel_error > kGainPeakRelError) continue;
-    const double ln = std::log(std::abs(b.measured / b.model));
-    if (std::abs(ln) >= best) best = std::abs(ln), at = b.freq_hz, signed_log = ln;
-  }
-  if (at < 0.0) return std::nullopt;
-  return GainPeak{at, best, signed_log};
-}
-
-// Whether h's own response at the peak (the measured one less that of the residual h
-// leaves) takes at least kGainPeakTakenShare of the disagreement's |ln| (thresholds.hpp).
-bool accounts_for(const DiagnoseResult& r, const HypothesisFit& h, const GainPeak& peak) {
-  if (h.yhat.size() != r.problem.y.size()) return false;
-  const FrequencyLocation left = locate_frequency(r.problem, r.problem.y - h.yhat);
-  const auto bin =
-      std::min_element(left.bins.begin(), left.bins.end(), [&](const auto& a, const auto& b) {
-        return std::abs(a.freq_hz - peak.freq_hz) < std::abs(b.freq_hz - peak.freq_hz);
-      });
-  if (bin == left.bins.end()) return false;
-  const std::complex<double> own = bin->measured - bin->residual_response;
-  if (std::abs(own) <= 0.0) return false;
-  const double left_log = std::abs(std::log(std::abs(bin->measured / own)));
-  return left_log <= (1.0 - kGainPeakTakenShare) * peak.log_ratio;
 }
 
 int choose_raw(const DiagnoseResult& r, double min_gain, Only only = Only::kAny) {
@@ -369,15 +329,6 @@ int prefer_delay_to_lag(const DiagnoseResult& r, int i, double min_gain) {
     return named ? static_cast<int>(j) : i;
   }
   return i;
-}
-
-std::optional<std::pair<double, double>> gain_peak_tells_apart(const DiagnoseResult& r,
-                                                               const HypothesisFit& chosen,
-                                                               const HypothesisFit& other) {
-  const auto peak = gain_peak(r.location);
-  if (!peak || !accounts_for(r, chosen, *peak) || accounts_for(r, other, *peak))
-    return std::nullopt;
-  return std::make_pair(peak->freq_hz, 20.0 * peak->signed_log / std::log(10.0));
 }
 
 namespace {

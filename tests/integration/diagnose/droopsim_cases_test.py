@@ -50,7 +50,14 @@ judged against droopsim's own truth.
     within 20 %;
   * a play from half-way (benchmark seed 2 d037, named `sensor_lag` before): `backlash` from
     its onset, the direction test beyond a lag repeated on that span (the whole record's
-    shows no play; the half-width is not checked: 0.12 against 0.29, the wander beside it).
+    shows no play; the half-width is not checked: 0.12 against 0.29, the wander beside it);
+  * a speed-error deadband behind three times the grid's wander (benchmark seed 4 d034,
+    named `gain_change` with a delay before, 0.69 points under the deadband): `deadband`,
+    the level test's evidence waiving the nonlinear margin, its half-width within 20 %;
+  * softer damper windings from 100 s (benchmark seed 4 d057, named `resonance` before, the
+    coupling's mode "moved" down and the swing mode up): `load_damping` within 20 %;
+  * an injection delay from 100 s whose lag twin led beside an immaterial drift (benchmark
+    seed 4 d002, named `extra_lag` before): `dead_time` at `governor_loop` within 20 %.
 """
 import json
 import os
@@ -176,6 +183,21 @@ class DroopsimCases(unittest.TestCase):
         # and was named; a lag must now beat the delay at its place by the margin.
         self.check_effect(*self.run_case("dead_time", "late", 583024), ("dead_time",),
                           "extra_delay_s", place="governor_loop")
+
+    def test_a_fuel_delay_from_100_s_beside_an_immaterial_drift_is_a_dead_time(self):
+        # Benchmark seed 4 d002: the lag with the drift led the delay with it by 0.01
+        # points; the drift was immaterial and the lag alone was named.
+        self.check_effect(*self.run_case("dead_time", "late", 119666), ("dead_time",),
+                          "extra_delay_s", place="governor_loop")
+
+    def test_a_speed_error_deadband_behind_the_wander_is_a_deadband(self):
+        truths, rep = self.run_case("deadband", "wander", 682908)
+        self.assertGreater(rep["location"]["amplitude"]["level_chi2"], 13.28)
+        self.check_effect(truths, rep, ("deadband",), "half_width")
+
+    def test_softer_damper_windings_from_100_s_are_a_damping_change(self):
+        self.check_effect(*self.run_case("load_damping", "late", 213427), ("load_damping",),
+                          "zeta")
 
     def test_a_plain_play_shown_beyond_a_lag_is_a_backlash(self):
         truths, rep = self.run_case("backlash", "plain", 913125)
