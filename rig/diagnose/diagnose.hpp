@@ -12,6 +12,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <array>
 #include <optional>
 #include <string>
 #include <vector>
@@ -50,6 +51,7 @@ struct OperatingPointMove {
   bool one_side_dependent = true;  // false: correlated over the whole record only
   double cross_ratio = 0.0;        // that side's, of the 99 % bound
   double cross_threshold = 0.0;
+  std::array<double, 2> sign_z{};  // the sign test before and after it (AmplitudeLocation)
 };
 
 struct DiagnoseResult {

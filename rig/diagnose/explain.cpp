@@ -11,6 +11,7 @@
 #include "rig/diagnose/diagnose.hpp"
 #include "rig/diagnose/effect_registry.hpp"
 #include "rig/diagnose/effects/common.hpp"
+#include "rig/diagnose/gain_peak.hpp"
 #include "rig/diagnose/governor_loop.hpp"
 #include "rig/diagnose/thresholds.hpp"
 #include "rig/diagnose/verdict.hpp"
@@ -65,6 +66,12 @@ std::string where_in_time_and_level(const DiagnoseResult& r) {
         "Each reversal of the input's direction shifts the output as {:.3g} input units "
         "would (play or friction). ",
         -a.rising.gain);
+  else if (a.direction_beyond_lag_dependent)
+    s += fmt::format(
+        "Beside what a lag or a delay would add (the model's response to the input's rate), "
+        "each reversal of the input's direction shifts the output (z {:.1f}): a play or "
+        "friction inside the loop, which acts first as a lag. ",
+        a.direction_beyond_lag_z);
   return s;
 }
 
@@ -236,15 +243,21 @@ std::string alternative_words(const DiagnoseResult& r) {
     if (!names.empty()) names += " with ";
     names += std::string(to_string(e.effect)) + place_suffix(e.place);
   }
+  const std::string a =
+      !names.empty() && std::string("aeiou").find(names.front()) != std::string::npos ? "An" : "A";
   std::string s = fmt::format(
-      " A {} fits about as well (validation score {:.2f} against {:.2f}): this "
-      "recording does not tell the two apart.",
-      names, g.score, r.chosen()->score);
+      " {} {} fits {} (validation score {:.2f} against {:.2f}): this recording does not tell "
+      "the two apart.",
+      a, names, g.score > r.chosen()->score ? "as well or better" : "about as well", g.score,
+      r.chosen()->score);
   if (const auto peak = gain_peak_tells_apart(r, *r.chosen(), g))
     s = fmt::format(
-        " A {} scores {:.2f} against {:.2f} but leaves the gain the data show at {:.2f} Hz "
-        "({:+.1f} dB against the model, beyond its uncertainty), which the {} accounts for.",
-        names, g.score, r.chosen()->score, peak->first, peak->second, r.verdict);
+        " {} {} scores {:.2f} against {:.2f} but leaves the gain the data show at {:.2f} Hz "
+        "({:+.1f} dB against the model{}, beyond its uncertainty), which the {} accounts for.",
+        a, names, g.score, r.chosen()->score, peak->freq_hz,
+        20.0 * peak->signed_log / std::log(10.0),
+        peak->from > 0 ? fmt::format(" from {:.0f} s", peak->from * r.problem.dt_s) : "",
+        r.verdict);
   if (r.location.amp.two_level_input)
     s += " On a two-level input every step is the same size, so a deadband, a play or a slew "
          "limit in the loop acts much as a gain or a lag would; a test whose bias varies in "
@@ -280,7 +293,13 @@ std::string operating_point_words(const DiagnoseResult& r) {
         "99 % bound, threshold {:.2f}) but on neither side of the event alone (at most {:.2f}, "
         "threshold {:.2f}): each side is a linear answer of its own",
         t.cross_ratio, t.cross_threshold, m.cross_ratio, m.cross_threshold);
-  s += "; no other test fails";
+  if (r.location.amp.sign_dependent)
+    s += fmt::format(
+        "; the answers to a rise and to a fall differ over the whole record (z {:.1f}) but on "
+        "neither side alone (z {:.1f} before, {:.1f} after); no other test fails",
+        r.location.amp.sign_z, m.sign_z[0], m.sign_z[1]);
+  else
+    s += "; no other test fails";
   if (!r.hypotheses.empty())
     s += fmt::format(" (the best effect, {}, changes the validation fit from {:.1f} % to {:.1f} %)",
                      r.hypotheses.front().name(), r.hypotheses.front().validation_fit_before,

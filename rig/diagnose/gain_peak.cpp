@@ -10,6 +10,37 @@
 
 namespace rig::diagnose {
 
+namespace {
+
+// The problem over [from, to) (to -1: the end): the recording's u and y there, the model as
+// it is (Welch's segments take each one's mean; a segment's first samples answer inputs
+// before it, a leak as small as the model's settling against the segment).
+Problem span_of(const Problem& pr, Eigen::Index from, Eigen::Index to) {
+  const Eigen::Index end = to < 0 ? pr.y.size() : to;
+  Problem sub = pr;
+  sub.u = pr.u.segment(from, end - from);
+  sub.y = pr.y.segment(from, end - from);
+  return sub;
+}
+
+// Frequency location of the residual y - yhat over the peak's samples, at its resolution.
+FrequencyLocation located_over(const Problem& pr, const Eigen::VectorXd& yhat,
+                               const GainPeak& peak) {
+  if (peak.from == 0 && peak.to < 0) return locate_frequency(pr, pr.y - yhat, peak.segment_length);
+  const Problem sub = span_of(pr, peak.from, peak.to);
+  return locate_frequency(sub, sub.y - yhat.segment(peak.from, sub.y.size()), peak.segment_length);
+}
+
+// The peak over `where` (its samples and resolution), if any.
+std::optional<GainPeak> peak_over(const DiagnoseResult& r, const GainPeak& where) {
+  auto peak = gain_peak(Location{.freq = located_over(r.problem, r.baseline_yhat, where)});
+  if (peak)
+    peak->from = where.from, peak->to = where.to, peak->segment_length = where.segment_length;
+  return peak;
+}
+
+}  // namespace
+
 // The largest disagreement of gain the data show beyond their uncertainty (thresholds.hpp),
 // if any.
 std::optional<GainPeak> gain_peak(const Location& loc) {
@@ -30,7 +61,7 @@ std::optional<GainPeak> gain_peak(const Location& loc) {
 // leaves) takes at least kGainPeakTakenShare of the disagreement's |ln| (thresholds.hpp).
 bool accounts_for(const DiagnoseResult& r, const HypothesisFit& h, const GainPeak& peak) {
   if (h.yhat.size() != r.problem.y.size()) return false;
-  const FrequencyLocation left = locate_frequency(r.problem, r.problem.y - h.yhat);
+  const FrequencyLocation left = located_over(r.problem, h.yhat, peak);
   const auto bin =
       std::min_element(left.bins.begin(), left.bins.end(), [&](const auto& a, const auto& b) {
         return std::abs(a.freq_hz - peak.freq_hz) < std::abs(b.freq_hz - peak.freq_hz);
@@ -42,13 +73,30 @@ bool accounts_for(const DiagnoseResult& r, const HypothesisFit& h, const GainPea
   return left_log <= (1.0 - thresholds::kGainPeakTakenShare) * peak.log_ratio;
 }
 
-std::optional<std::pair<double, double>> gain_peak_tells_apart(const DiagnoseResult& r,
-                                                               const HypothesisFit& chosen,
-                                                               const HypothesisFit& other) {
-  const auto peak = gain_peak(r.location);
+std::optional<GainPeak> gain_peak(const DiagnoseResult& r, const HypothesisFit& h) {
+  if (auto whole = gain_peak(r.location)) return whole;
+  const Problem& pr = r.problem;
+  const Eigen::Index n = pr.y.size(), to = h.active_to < 0 ? n : h.active_to;
+  // The same 16 segments of the shortest length as a span needs (a fitted record is
+  // longer; a result assembled without a record has none).
+  if (r.baseline_yhat.size() != n || n < thresholds::kGainPeakSpanMinSamples) return std::nullopt;
+  GainPeak where;
+  if (h.active_from > 0 && to - h.active_from >= thresholds::kGainPeakSpanMinSamples)
+    where.from = h.active_from, where.to = h.active_to;
+  if (where.from > 0)
+    if (auto peak = peak_over(r, where)) return peak;
+  const Eigen::Index samples = (where.to < 0 ? n : where.to) - where.from;
+  where.segment_length =
+      std::max<Eigen::Index>(64, welch_segment(samples) / thresholds::kGainPeakCoarserBy);
+  return peak_over(r, where);
+}
+
+std::optional<GainPeak> gain_peak_tells_apart(const DiagnoseResult& r, const HypothesisFit& chosen,
+                                              const HypothesisFit& other) {
+  const auto peak = gain_peak(r, chosen);
   if (!peak || !accounts_for(r, chosen, *peak) || accounts_for(r, other, *peak))
     return std::nullopt;
-  return std::make_pair(peak->freq_hz, 20.0 * peak->signed_log / std::log(10.0));
+  return peak;
 }
 
 }  // namespace rig::diagnose

@@ -13,13 +13,24 @@ struct GainPeak {
   double freq_hz = 0.0;
   double log_ratio = 0.0;   // |ln |H1 / G||
   double signed_log = 0.0;  // ln |H1 / G|
+  // The samples it was seen over: the whole record, or the span a late effect acts on.
+  Eigen::Index from = 0, to = -1;   // -1: to the end
+  Eigen::Index segment_length = 0;  // its Welch segments' (0: welch_segment's)
 };
 
 // The largest disagreement of gain the data show beyond their uncertainty, if any.
 std::optional<GainPeak> gain_peak(const Location& loc);
+// That of the whole record or, when it shows none and h acts from late in the record, that
+// of the span h acts on (an effect present in a third of the record shows a third of its
+// cross-spectrum over the whole), if any.
+std::optional<GainPeak> gain_peak(const DiagnoseResult& r, const HypothesisFit& h);
 
 // Whether h's own response at the peak (the measured one less that of the residual h
 // leaves) takes at least kGainPeakTakenShare of the disagreement's |ln| (thresholds.hpp).
 bool accounts_for(const DiagnoseResult& r, const HypothesisFit& h, const GainPeak& peak);
+
+// When the data show a gain peak that `chosen` accounts for and `other` does not: the peak.
+std::optional<GainPeak> gain_peak_tells_apart(const DiagnoseResult& r, const HypothesisFit& chosen,
+                                              const HypothesisFit& other);
 
 }  // namespace rig::diagnose

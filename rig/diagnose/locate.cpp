@@ -92,7 +92,7 @@ namespace {
 
 bool input_tests_fail(const Location& loc) {
   return loc.freq.band_hz.has_value() || !loc.tests.independent || loc.half_dependent >= 0 ||
-         loc.amp.amplitude_dependent || loc.amp.sign_dependent || loc.amp.direction_dependent;
+         loc.amp.fails();
 }
 
 // The cross-correlation test on each half of r (after the warm-up), the 1 % shared.

@@ -60,9 +60,10 @@ Eigen::Index welch_segment(Eigen::Index n) {
   return l;
 }
 
-FrequencyLocation locate_frequency(const Problem& pr, const Eigen::VectorXd& r) {
+FrequencyLocation locate_frequency(const Problem& pr, const Eigen::VectorXd& r,
+                                   Eigen::Index segment_length) {
   fra::WelchOptions wo;
-  wo.segment_length = welch_segment(pr.u.size());
+  wo.segment_length = segment_length > 0 ? segment_length : welch_segment(pr.u.size());
   const fra::CrossSpectra sy = fra::welch_cross_spectra(pr.u, pr.y, pr.dt_s, wo);
   const fra::CrossSpectra sr = fra::welch_cross_spectra(pr.u, r, pr.dt_s, wo);
   FrequencyLocation loc;

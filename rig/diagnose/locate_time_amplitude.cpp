@@ -17,6 +17,7 @@
 #include <cmath>
 #include <limits>
 #include <numeric>
+#include <optional>
 #include <vector>
 
 #include "rig/diagnose/blocks.hpp"
@@ -222,21 +223,48 @@ Eigen::VectorXd rate_of(const Eigen::VectorXd& x, double dt_s) {
   return d;
 }
 
+// The rows [from, to) (to < 0: the end) past the warm-up: r and yh detrended there, and the
+// effective number of samples (Bartlett); nothing when fewer than an amplitude test needs.
+struct Rows {
+  Eigen::Index from = 0, m = 0;
+  Eigen::VectorXd r, yh;
+  double n_eff = 0.0;
+};
+std::optional<Rows> rows_of(const Problem& pr, const Eigen::VectorXd& r_all,
+                            const Eigen::VectorXd& yh_all, Eigen::Index from, Eigen::Index to) {
+  const Eigen::Index n = r_all.size();
+  while (from < n && pr.est_weight(from) + pr.val_weight(from) <= 0.0) ++from;
+  const Eigen::Index m = (to < 0 ? n : std::min(to, n)) - from;
+  if (m < kMinAmplitudeSamples) return std::nullopt;
+  Rows rows{from, m, detrend(pr, r_all).segment(from, m), detrend(pr, yh_all).segment(from, m)};
+  rows.n_eff =
+      static_cast<double>(m) / bartlett_factor(rows.r, rows.yh, std::min<Eigen::Index>(200, m / 4));
+  return rows;
+}
+
 }  // namespace
 
 double direction_beyond_lag_z(const Problem& pr, const Eigen::VectorXd& r_all,
                               const Eigen::VectorXd& yh_all, Eigen::Index from, Eigen::Index to) {
-  const Eigen::Index n = r_all.size();
-  while (from < n && pr.est_weight(from) + pr.val_weight(from) <= 0.0) ++from;
-  const Eigen::Index m = (to < 0 ? n : std::min(to, n)) - from;
-  if (m < kMinAmplitudeSamples) return 0.0;
-  const Eigen::VectorXd r = detrend(pr, r_all).segment(from, m);
-  const Eigen::VectorXd yh = detrend(pr, yh_all).segment(from, m);
-  const double n_eff =
-      static_cast<double>(m) / bartlett_factor(r, yh, std::min<Eigen::Index>(200, m / 4));
-  const Eigen::VectorXd g_direction = masked_response(pr, direction_of(pr.u)).segment(from, m);
-  const Eigen::VectorXd g_rate = masked_response(pr, rate_of(pr.u, pr.dt_s)).segment(from, m);
-  return direction_fit(yh, g_direction, r, n_eff, &g_rate).z;
+  const auto rows = rows_of(pr, r_all, yh_all, from, to);
+  if (!rows) return 0.0;
+  const auto at = [&](const Eigen::VectorXd& x) { return x.segment(rows->from, rows->m); };
+  const Eigen::VectorXd g_direction = at(masked_response(pr, direction_of(pr.u)));
+  const Eigen::VectorXd g_rate = at(masked_response(pr, rate_of(pr.u, pr.dt_s)));
+  return direction_fit(rows->yh, g_direction, rows->r, rows->n_eff, &g_rate).z;
+}
+
+double sign_z(const Problem& pr, const Eigen::VectorXd& r_all, const Eigen::VectorXd& yh_all,
+              Eigen::Index from, Eigen::Index to) {
+  const auto rows = rows_of(pr, r_all, yh_all, from, to);
+  if (!rows) return 0.0;
+  Eigen::MatrixXd xs(rows->m, 2);
+  xs.col(0) = masked_response(pr, pr.u.cwiseMax(0.0)).segment(rows->from, rows->m);
+  xs.col(1) = masked_response(pr, pr.u.cwiseMin(0.0)).segment(rows->from, rows->m);
+  const Ls sign = least_squares(xs, rows->r);
+  const double s2s = sign.rss / std::max(1.0, rows->n_eff - 2);
+  const double var_diff = s2s * (sign.inv(0, 0) + sign.inv(1, 1) - 2.0 * sign.inv(0, 1));
+  return var_diff > 0.0 ? (sign.beta(0) - sign.beta(1)) / std::sqrt(var_diff) : 0.0;
 }
 
 AmplitudeLocation locate_amplitude(const Problem& pr, const Eigen::VectorXd& r_all,
@@ -319,6 +347,8 @@ AmplitudeLocation locate_amplitude(const Problem& pr, const Eigen::VectorXd& r_a
       a.level_chi2 > kLevelChi2Bound && std::abs(spread) > thresholds::kAmplitudeMinSpread;
   a.sign_dependent = std::abs(a.sign_z) > thresholds::kSignDirectionZ;
   a.direction_dependent = std::abs(a.direction_z) > thresholds::kSignDirectionZ;
+  a.direction_beyond_lag_dependent =
+      std::abs(a.direction_beyond_lag_z) > thresholds::kSignDirectionZ;
   return a;
 }
 

@@ -226,10 +226,7 @@ void write_report_html(const DiagnoseResult& r, const ReportContext& c,
                                                loc.freq.band_hz->second)
                                  : "none"},
        {"time windows", std::to_string(loc.windows.size())},
-       {"amplitude dependent",
-        loc.amp.amplitude_dependent || loc.amp.sign_dependent || loc.amp.direction_dependent
-            ? "yes"
-            : "no"},
+       {"amplitude dependent", loc.amp.fails() ? "yes" : "no"},
        {"residual independent of input", loc.tests.independent ? "yes" : "no"},
        {"split", fmt::format("{} interleaved blocks after {:.1f} s warm-up", r.blocks,
                              static_cast<double>(r.warmup) * r.problem.dt_s)},

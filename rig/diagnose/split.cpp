@@ -166,9 +166,7 @@ bool explains(const Problem& pr, const HypothesisFit& h, const Location& loc) {
   const bool disturbance_only = std::none_of(
       h.effects.begin(), h.effects.end(),
       [](const AppliedEffect& e) { return kind_of(e.effect) != EffectKind::kDisturbance; });
-  if (disturbance_only && !loc.amp.two_level_input &&
-      (loc.amp.amplitude_dependent || loc.amp.sign_dependent || loc.amp.direction_dependent))
-    return false;
+  if (disturbance_only && !loc.amp.two_level_input && (loc.amp.fails())) return false;
   if (h.yhat.size() == 0) return true;
   Eigen::Index from = 0;
   while (from < pr.y.size() && pr.est_weight(from) + pr.val_weight(from) <= 0.0) ++from;

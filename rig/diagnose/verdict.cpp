@@ -284,9 +284,9 @@ int step_gain_choice(const DiagnoseResult& r, double min_gain) {
 // the best hypothesis within kNonlinearOverLinearPct that accounts for it, if one does (not a
 // nonlinear one in place of a linear choice).
 int account_for_gain_peak(const DiagnoseResult& r, int i, double min_gain) {
-  const auto peak = gain_peak(r.location);
-  if (!peak) return i;
   const auto& chosen = r.hypotheses[static_cast<std::size_t>(i)];
+  const auto peak = gain_peak(r, chosen);
+  if (!peak) return i;
   if (accounts_for(r, chosen, *peak)) return i;
   for (std::size_t j = 0; j < r.hypotheses.size(); ++j) {  // ranked
     const auto& g = r.hypotheses[j];

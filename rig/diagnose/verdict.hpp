@@ -32,12 +32,6 @@ int choose(const DiagnoseResult& r, double min_gain_pct);
 // not tell the two apart. -1 for none. The lag twins and a hysteresis with its play are one.
 int close_alternative(const DiagnoseResult& r);
 
-// When the data show a gain peak (verdict step 5, thresholds.hpp kGainPeakRatio) that
-// `chosen` accounts for and `other` does not: its frequency (Hz) and |H1/G| there (dB).
-std::optional<std::pair<double, double>> gain_peak_tells_apart(const DiagnoseResult& r,
-                                                               const HypothesisFit& chosen,
-                                                               const HypothesisFit& other);
-
 // When nothing is chosen although the input tests failed: a grid event that moved the
 // operating point with the residual correlated with the input on one side of it only, and
 // no other test failing (operating_point.cpp), if that is what the record shows.

@@ -57,7 +57,14 @@ judged against droopsim's own truth.
   * softer damper windings from 100 s (benchmark seed 4 d057, named `resonance` before, the
     coupling's mode "moved" down and the swing mode up): `load_damping` within 20 %;
   * an injection delay from 100 s whose lag twin led beside an immaterial drift (benchmark
-    seed 4 d002, named `extra_lag` before): `dead_time` at `governor_loop` within 20 %.
+    seed 4 d002, named `extra_lag` before): `dead_time` at `governor_loop` within 20 %;
+  * a softened coupling from 100 s (benchmark seed 1 d052) and behind three times the noise
+    (seed 4 d051), both named `dead_time` on the governor's error before: `resonance` within
+    20 %, the gain peak seen over the effect's span, or at a coarser Welch resolution;
+  * a linkage play behind three times the noise (seed 1 d036, `none` before): the direction
+    test beyond a lag fails, and `backlash` within 20 %;
+  * a null behind a grid event whose sign test fails over the whole record only (seed 6
+    d084, `unexplained` before): `none`, the operating point moved.
 """
 import json
 import os
@@ -167,6 +174,16 @@ class DroopsimCases(unittest.TestCase):
         self.assertIn("on neither side of the event alone", rep["explanation"])
         self.assertFalse(rep["location"]["residual_tests"]["independent"])
 
+    def test_a_grid_event_whose_sign_test_fails_on_neither_side_alone_is_none(self):
+        # Benchmark seed 6 d084 (no effect): a fall at 108.4 s on the curved fuel map. The
+        # sign test fails over the whole record (z -5.5) but on neither side of the event
+        # alone (-4.6, -3.3): the record pools two answers (`unexplained` before).
+        _, rep = self.run_case("none", "load_step", 968336)
+        self.assertEqual(rep["verdict"], "none", rep["explanation"])
+        self.assertTrue(rep["bus_frequency"]["operating_point_move"], rep["explanation"])
+        self.assertTrue(rep["location"]["amplitude"]["sign_dependent"])
+        self.assertIn("on neither side alone", rep["explanation"])
+
     def test_a_combustion_lag_inside_the_speed_loop_is_a_lag_there(self):
         self.check_lag(*self.run_case("extra_lag", "plain", 187690), place="governor_loop")
 
@@ -199,6 +216,16 @@ class DroopsimCases(unittest.TestCase):
         self.check_effect(*self.run_case("load_damping", "late", 213427), ("load_damping",),
                           "zeta")
 
+    def test_a_play_behind_3x_the_noise_fails_the_direction_test_beyond_a_lag(self):
+        # Benchmark seed 1 d036: the plain direction test passed (z -1.3 once the sampling
+        # convention's half-sample shift took the play's lag), the one beyond a lag fails
+        # (-5.8 there, -5.2 against the model as given): the input tests fail, the shift is
+        # not taken and the play is named (`none` before).
+        truths, rep = self.run_case("backlash", "noisy", 335627)
+        self.assertLess(rep["location"]["amplitude"]["direction_beyond_lag_z"], -5.0)
+        self.assertTrue(rep["location"]["input_mismatch"])
+        self.check_effect(truths, rep, ("backlash",), "half_width")
+
     def test_a_plain_play_shown_beyond_a_lag_is_a_backlash(self):
         truths, rep = self.run_case("backlash", "plain", 913125)
         self.assertLessEqual(rep["location"]["amplitude"]["direction_beyond_lag_z"], -2.5)
@@ -219,6 +246,21 @@ class DroopsimCases(unittest.TestCase):
         self.assertIn("other_freq_hz", h["effects"][0]["params"], rep["explanation"])
         # The delay beside it is not "as good": the explanation says what told them apart.
         self.assertNotIn("does not tell the two apart", rep["explanation"])
+        self.assertIn("which the resonance accounts for", rep["explanation"])
+
+    def test_a_softened_coupling_from_100_s_is_a_resonance_by_its_spans_gain_peak(self):
+        # Benchmark seed 1 d052: over the whole record the moved mode's gain is not
+        # significant; over the span the effect acts on (from its onset) it is.
+        truths, rep = self.run_case("resonance", "late", 79801)
+        self.check_effect(truths, rep, ("resonance",), "freq_hz")
+        self.assertIn("which the resonance accounts for", rep["explanation"])
+        self.assertRegex(rep["explanation"], r"against the model from \d+ s")
+
+    def test_a_softened_coupling_behind_3x_the_noise_is_a_resonance(self):
+        # Benchmark seed 4 d051: at the record's Welch resolution the noise hides the mode's
+        # gain; four times the segments show it (+13 dB at 6.2 Hz).
+        truths, rep = self.run_case("resonance", "noisy", 787176)
+        self.check_effect(truths, rep, ("resonance",), "freq_hz")
         self.assertIn("which the resonance accounts for", rep["explanation"])
 
     def check_curvature(self, rep):

@@ -1,6 +1,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <vector>
 
 #include "concealed.hpp"
@@ -187,6 +188,28 @@ TEST(Locate, AQuantisedOutputIsNotClippedButOneAtItsFloorIs) {
   const OutputClip c = find_output_clip(q.cwiseMax(floor));
   EXPECT_EQ(c.side, -1);
   EXPECT_EQ(c.level, floor);
+}
+
+// The sign test over rows: an answer to rises larger than to falls in the second half only
+// shows there and not in the first half (operating_point.cpp repeats it on each side of a
+// grid event).
+TEST(Locate, TheSignTestOverRowsSeesAnAsymmetryOnlyWhereItIs) {
+  const DiagnoseInput in = test::null_record(41);
+  int blocks = 0;
+  Eigen::Index warm = 0;
+  Problem pr = prepare_problem(in, &blocks, &warm);
+  const Eigen::Index n = pr.y.size(), half = n / 2;
+  const Eigen::VectorXd up = model::simulate(pr.tf, pr.u.cwiseMax(0.0), pr.dt_s);
+  pr.y.tail(n - half) += 0.15 * up.tail(n - half);
+  const Eigen::VectorXd yhat = model_output(pr, {}).yhat;
+  const Eigen::VectorXd r = pr.y - yhat;
+  const double first = sign_z(pr, r, yhat, 0, half), second = sign_z(pr, r, yhat, half, -1);
+  EXPECT_LT(std::abs(first), 3.0) << first;
+  EXPECT_GT(second, 5.0) << second;
+  // The whole record's test sees it too, diluted.
+  const double whole = sign_z(pr, r, yhat, 0, -1);
+  EXPECT_GT(whole, 3.0) << whole;
+  EXPECT_LT(whole, second * 1.2) << whole;
 }
 
 }  // namespace
