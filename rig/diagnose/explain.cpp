@@ -69,9 +69,11 @@ std::string where_in_time_and_level(const DiagnoseResult& r) {
   else if (a.direction_beyond_lag_dependent)
     s += fmt::format(
         "Beside what a lag or a delay would add (the model's response to the input's rate), "
-        "each reversal of the input's direction shifts the output (z {:.1f}): a play or "
-        "friction inside the loop, which acts first as a lag. ",
-        a.direction_beyond_lag_z);
+        "each reversal of the input's direction shifts the output (z {:.1f}): {}. ",
+        a.direction_beyond_lag_z,
+        a.direction_beyond_lag_z < 0.0
+            ? "a play or friction inside the loop, which acts first as a lag"
+            : "the sign opposite to a play's, as a slew limit inside the loop gives");
   return s;
 }
 
@@ -256,7 +258,10 @@ std::string alternative_words(const DiagnoseResult& r) {
         "({:+.1f} dB against the model{}, beyond its uncertainty), which the {} accounts for.",
         a, names, g.score, r.chosen()->score, peak->freq_hz,
         20.0 * peak->signed_log / std::log(10.0),
-        peak->from > 0 ? fmt::format(" from {:.0f} s", peak->from * r.problem.dt_s) : "",
+        peak->from <= 0 ? std::string()
+        : peak->to < 0  ? fmt::format(" from {:.0f} s", peak->from * r.problem.dt_s)
+                        : fmt::format(" from {:.0f} s to {:.0f} s", peak->from * r.problem.dt_s,
+                                      peak->to * r.problem.dt_s),
         r.verdict);
   if (r.location.amp.two_level_input)
     s += " On a two-level input every step is the same size, so a deadband, a play or a slew "

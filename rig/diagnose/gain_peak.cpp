@@ -77,8 +77,8 @@ std::optional<GainPeak> gain_peak(const DiagnoseResult& r, const HypothesisFit& 
   if (auto whole = gain_peak(r.location)) return whole;
   const Problem& pr = r.problem;
   const Eigen::Index n = pr.y.size(), to = h.active_to < 0 ? n : h.active_to;
-  // The same 16 segments of the shortest length as a span needs (a fitted record is
-  // longer; a result assembled without a record has none).
+  // As many samples as a span needs (a fitted record has more; a result assembled without a
+  // record has none).
   if (r.baseline_yhat.size() != n || n < thresholds::kGainPeakSpanMinSamples) return std::nullopt;
   GainPeak where;
   if (h.active_from > 0 && to - h.active_from >= thresholds::kGainPeakSpanMinSamples)
@@ -93,10 +93,13 @@ std::optional<GainPeak> gain_peak(const DiagnoseResult& r, const HypothesisFit& 
 
 std::optional<GainPeak> gain_peak_tells_apart(const DiagnoseResult& r, const HypothesisFit& chosen,
                                               const HypothesisFit& other) {
-  const auto peak = gain_peak(r, chosen);
-  if (!peak || !accounts_for(r, chosen, *peak) || accounts_for(r, other, *peak))
-    return std::nullopt;
-  return peak;
+  // Over the chosen's samples or the other's (the verdict's step 5 looked over the span of the
+  // choice before it, which may be either).
+  for (const HypothesisFit* h : {&chosen, &other}) {
+    const auto peak = gain_peak(r, *h);
+    if (peak && accounts_for(r, chosen, *peak) && !accounts_for(r, other, *peak)) return peak;
+  }
+  return std::nullopt;
 }
 
 }  // namespace rig::diagnose

@@ -20,9 +20,10 @@ struct GainPeak {
 
 // The largest disagreement of gain the data show beyond their uncertainty, if any.
 std::optional<GainPeak> gain_peak(const Location& loc);
-// That of the whole record or, when it shows none and h acts from late in the record, that
-// of the span h acts on (an effect present in a third of the record shows a third of its
-// cross-spectrum over the whole), if any.
+// That of the whole record or, when it shows none: that of the span h acts on when h acts from
+// late in the record (an effect present in a third of the record shows a third of its
+// cross-spectrum over the whole), then that of the same samples with Welch segments
+// kGainPeakCoarserBy times shorter; if any. None on a record under kGainPeakSpanMinSamples.
 std::optional<GainPeak> gain_peak(const DiagnoseResult& r, const HypothesisFit& h);
 
 // Whether h's own response at the peak (the measured one less that of the residual h

@@ -73,6 +73,9 @@ json bus_frequency_json(const DiagnoseResult& r) {
            b.event_at > 0 ? json(static_cast<double>(b.event_at) * r.problem.dt_s) : json(nullptr)},
           {"event_step", b.event_step},
           {"operating_point_move", r.operating_point_move.has_value()},
+          {"sign_z_sides", r.operating_point_move ? json::array({r.operating_point_move->sign_z[0],
+                                                                 r.operating_point_move->sign_z[1]})
+                                                  : json(nullptr)},
           {"note", b.note}};
 }
 
@@ -114,6 +117,7 @@ json location_json(const DiagnoseResult& r) {
             {"direction_dependent", loc.amp.direction_dependent},
             {"output_direction_z", loc.amp.output_direction_z},
             {"direction_beyond_lag_z", loc.amp.direction_beyond_lag_z},
+            {"direction_beyond_lag_dependent", loc.amp.direction_beyond_lag_dependent},
             {"two_level_input", loc.amp.two_level_input}}},
           {"residual_tests",
            {{"whiteness_ratio", loc.tests.whiteness_ratio},

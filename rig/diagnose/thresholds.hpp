@@ -81,12 +81,14 @@ inline constexpr double kGainPeakRatio = 2.0;
 inline constexpr double kGainPeakRelError = 0.25;
 inline constexpr double kGainPeakTakenShare = 0.5;
 // An effect found to act from late in the record (onset.cpp) is looked for over its own span
-// when the whole record shows no peak, if the span holds this many samples: 16 half-overlapped
-// Welch segments of the shortest length (welch_segment), as the whole record's test needs.
+// when the whole record shows no peak, if the span holds this many samples: 16 disjoint
+// segments of welch_segment's shortest length (64), so that its own segments (128 at this
+// length) number 15 or more, as on the whole record.
 inline constexpr Eigen::Index kGainPeakSpanMinSamples = 16 * 64;
-// Failing that, it is looked for again with Welch segments this many times shorter: four
-// times the segments shrink |H1|'s standard error by half where noise hides a mode, at a
-// resolution (0.4 Hz on 150 s at 100 Hz) still finer than a mode's half-power width.
+// Failing that, it is looked for again with Welch segments this many times shorter (never
+// under 64 samples: 2 times on spans under 2048): four times the segments shrink |H1|'s
+// standard error by half where noise hides a mode, at a resolution (0.4 Hz on 150 s at
+// 100 Hz) still finer than a mode's half-power width.
 inline constexpr Eigen::Index kGainPeakCoarserBy = 4;
 
 // --- Location (locate.cpp, locate_time_amplitude.cpp; docs/diagnose.md Method step 2) ---

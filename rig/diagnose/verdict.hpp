@@ -33,8 +33,9 @@ int choose(const DiagnoseResult& r, double min_gain_pct);
 int close_alternative(const DiagnoseResult& r);
 
 // When nothing is chosen although the input tests failed: a grid event that moved the
-// operating point with the residual correlated with the input on one side of it only, and
-// no other test failing (operating_point.cpp), if that is what the record shows.
+// operating point with the residual correlated with the input on one side of it only (or
+// over the whole record only), and no other test failing but a sign test that passes on each
+// side alone (operating_point.cpp), if that is what the record shows.
 std::optional<OperatingPointMove> operating_point_moved(const DiagnoseResult& r);
 
 // The verdict word of a chosen hypothesis.
