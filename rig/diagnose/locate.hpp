@@ -145,6 +145,18 @@ std::vector<TimeWindow> locate_time(const Problem& pr, const Eigen::VectorXd& re
 // the whole record's test.
 double direction_beyond_lag_z(const Problem& pr, const Eigen::VectorXd& residual,
                               const Eigen::VectorXd& yhat, Eigen::Index from, Eigen::Index to);
+// The level test (AmplitudeLocation::by_level, level_chi2) on the rows [from, to) only (to <
+// 0: to the end), its bands the quantiles of |u| there: an effect from an onset is diluted in
+// the whole record's test.
+struct LevelTest {
+  std::vector<LevelBin> by_level;
+  double chi2 = 0.0;
+  // Beyond chi^2(4) at 1e-4 with the outer bands' gains apart (AmplitudeLocation::
+  // amplitude_dependent).
+  bool fires() const;
+};
+LevelTest level_test(const Problem& pr, const Eigen::VectorXd& residual,
+                     const Eigen::VectorXd& yhat, Eigen::Index from, Eigen::Index to);
 // The sign test (AmplitudeLocation::sign_z) on the rows [from, to) only (to < 0: to the end).
 double sign_z(const Problem& pr, const Eigen::VectorXd& residual, const Eigen::VectorXd& yhat,
               Eigen::Index from, Eigen::Index to);

@@ -55,7 +55,7 @@ inline constexpr double kRedampZerosDamping = 0.3;
 inline constexpr double kDampingOverStiffness = 3.0;
 
 // A play or a hysteresis loop is the verdict only when the location's direction test
-// (the residual on G(sign du/dt), locate_time_amplitude.cpp) gives |z| >= 3: a direction
+// (the residual on G(sign du/dt), locate_amplitude.cpp) gives |z| >= 3: a direction
 // effect at three standard errors. On gensim every play and hysteresis case shows
 // |z| 2.8-8.7 (2.8 the one present in half the record), every deadband case 0.2-1.5.
 inline constexpr double kDirectionEvidenceZ = 3.0;
@@ -91,7 +91,7 @@ inline constexpr Eigen::Index kGainPeakSpanMinSamples = 16 * 64;
 // 100 Hz) still finer than a mode's half-power width.
 inline constexpr Eigen::Index kGainPeakCoarserBy = 4;
 
-// --- Location (locate.cpp, locate_time_amplitude.cpp; docs/diagnose.md Method step 2) ---
+// --- Location (locate.cpp, locate_time.cpp, locate_amplitude.cpp; docs/diagnose.md step 2)
 // A residual spectral line: its PSD bin exceeds this many times the median of its
 // neighbours' (8 bins each side, the adjacent ones left out). The median of a chi^2(2 M)
 // periodogram's neighbours is steady; a factor 12 above it is beyond the Welch estimate's

@@ -212,5 +212,35 @@ TEST(Locate, TheSignTestOverRowsSeesAnAsymmetryOnlyWhereItIs) {
   EXPECT_LT(whole, second * 1.2) << whole;
 }
 
+// The level test over rows: a gain that only the larger half of |u| sees (the response
+// doubled there), from half-way, is found on the second half and not on the first; over the whole
+// record it is the test of locate_amplitude.
+TEST(Locate, TheLevelTestOverRowsSeesALevelDependentGainOnlyWhereItIs) {
+  const DiagnoseInput in = test::null_record(43);
+  int blocks = 0;
+  Eigen::Index warm = 0;
+  Problem pr = prepare_problem(in, &blocks, &warm);
+  const Eigen::Index n = pr.y.size(), half = n / 2;
+  std::vector<double> mags(pr.u.data(), pr.u.data() + n);
+  for (double& m : mags) m = std::abs(m);
+  std::nth_element(mags.begin(), mags.begin() + n / 2, mags.end());
+  const double median = mags[static_cast<std::size_t>(n / 2)];
+  const Eigen::VectorXd large =
+      pr.u.unaryExpr([median](double v) { return std::abs(v) > median ? v : 0.0; });
+  const Eigen::VectorXd extra = model::simulate(pr.tf, large, pr.dt_s);
+  pr.y.tail(n - half) += extra.tail(n - half);
+  const Eigen::VectorXd yhat = model_output(pr, {}).yhat;
+  const Eigen::VectorXd r = pr.y - yhat;
+  const LevelTest first = level_test(pr, r, yhat, 0, half),
+                  second = level_test(pr, r, yhat, half, -1);
+  EXPECT_FALSE(first.fires()) << first.chi2;
+  EXPECT_LT(first.chi2, 13.28) << "chi^2(4) at 1 %";
+  EXPECT_TRUE(second.fires()) << second.chi2;
+  ASSERT_EQ(second.by_level.size(), 5u);
+  EXPECT_GT(second.by_level.back().gain, second.by_level.front().gain + 0.1);
+  const LevelTest whole = level_test(pr, r, yhat, 0, -1);
+  EXPECT_DOUBLE_EQ(whole.chi2, locate_amplitude(pr, r, yhat).level_chi2);
+}
+
 }  // namespace
 }  // namespace rig::diagnose

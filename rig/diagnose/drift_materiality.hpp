@@ -1,0 +1,17 @@
+// Whether a fitted drift is material (docs/diagnose.md, Verdict): a slow wander of a few kW
+// is the operating noise of a running set, not a missing effect, unless it is large or
+// modelling it raises the fit (thresholds.hpp, "Drift materiality").
+#pragma once
+
+#include "rig/diagnose/diagnose.hpp"
+
+namespace rig::diagnose {
+
+// A drift alone (h's only effect) that is not material; false for any other hypothesis.
+bool immaterial_drift(const HypothesisFit& h, const Problem& problem);
+
+// Hypothesis i of r if it is not a pair "effect + drift", or if its drift is material: else
+// the same effect at the same place alone, when that scores min_gain_pct.
+int without_immaterial_drift(const DiagnoseResult& r, int i, double min_gain_pct);
+
+}  // namespace rig::diagnose

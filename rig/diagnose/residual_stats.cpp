@@ -1,0 +1,64 @@
+#include "rig/diagnose/residual_stats.hpp"
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
+
+#include "rig/diagnose/blocks.hpp"
+#include "rig/diagnose/locate.hpp"
+#include "rig/signal/ac_coupling.hpp"
+
+namespace rig::diagnose {
+
+double quantile(std::vector<double> v, double q) {
+  if (v.empty()) return 0.0;
+  const auto k = static_cast<std::size_t>(q * static_cast<double>(v.size() - 1));
+  std::nth_element(v.begin(), v.begin() + static_cast<long>(k), v.end());
+  return v[k];
+}
+
+double bartlett_factor(const Eigen::VectorXd& a, const Eigen::VectorXd& b, Eigen::Index lags) {
+  const Eigen::Index n = a.size();
+  const double aa = a.squaredNorm(), bb = b.squaredNorm();
+  if (aa <= 0.0 || bb <= 0.0) return 1.0;
+  double c = 1.0;
+  for (Eigen::Index k = 1; k <= std::min(lags, n - 1); ++k) {
+    const double ra = a.head(n - k).dot(a.tail(n - k)) / aa;
+    const double rb = b.head(n - k).dot(b.tail(n - k)) / bb;
+    c += 2.0 * ra * rb;
+  }
+  return std::max(c, 1.0);
+}
+
+Ls least_squares(const Eigen::MatrixXd& x, const Eigen::VectorXd& r) {
+  Ls out;
+  const Eigen::MatrixXd xtx = x.transpose() * x;
+  out.inv = xtx.completeOrthogonalDecomposition().pseudoInverse();
+  out.beta = out.inv * (x.transpose() * r);
+  out.rss = (r - x * out.beta).squaredNorm();
+  return out;
+}
+
+Eigen::VectorXd detrend(const Problem& pr, const Eigen::VectorXd& x) {
+  return x - smooth_zero_phase(x, drift_smooth_s(pr), pr.dt_s);
+}
+
+Eigen::VectorXd masked_response(const Problem& pr, const Eigen::VectorXd& u) {
+  Eigen::VectorXd z = model::simulate(pr.tf, u, pr.dt_s);
+  if (pr.output_rc_s) z = signal::ac_couple(z, pr.dt_s, *pr.output_rc_s);
+  return detrend(pr, z);
+}
+
+std::optional<Rows> rows_of(const Problem& pr, const Eigen::VectorXd& r_all,
+                            const Eigen::VectorXd& yh_all, Eigen::Index from, Eigen::Index to) {
+  const Eigen::Index n = r_all.size();
+  while (from < n && pr.est_weight(from) + pr.val_weight(from) <= 0.0) ++from;
+  const Eigen::Index m = (to < 0 ? n : std::min(to, n)) - from;
+  if (m < kMinAmplitudeSamples) return std::nullopt;
+  Rows rows{from, m, detrend(pr, r_all).segment(from, m), detrend(pr, yh_all).segment(from, m)};
+  rows.n_eff =
+      static_cast<double>(m) / bartlett_factor(rows.r, rows.yh, std::min<Eigen::Index>(200, m / 4));
+  return rows;
+}
+
+}  // namespace rig::diagnose
