@@ -41,31 +41,25 @@ bool immaterial_drift(const HypothesisFit& h, const Problem& pr) {
   return derived_of(h, "drift_rms") < kDriftMaterialFraction * pr.scales.z_std;
 }
 
-// The drift of a pair "effect + drift" is material when it is alone, or when it raises the
-// validation fit by kDriftMaterialGainPct beside the effect: the effect's own residual can
-// hide a wander from the drift test and from a drift fitted alone (droopsim d077, a slew
-// limit inside the loop with a 4-6 kW wander: the baseline's residual shows a drift share of
-// 0.13, under the test's bound, and the drift adds 7-9 points beside the limit). Beside an
-// effect the verdict names anyway, the transducer's accuracy does not make a wander that
-// raises the fit that much immaterial: that bound keeps a record whose only finding is the
-// set's normal wander at `none`. Otherwise the augmented model should not carry the wander
-// as a change.
+// A pair "effect + drift" whose drift alone is immaterial is reported as the effect alone
+// when that single scores min_gain too: the augmented model should not carry the set's
+// normal wander as a change. (Beside an effect the wander is not judged by what it adds:
+// droopsim's records carry the grid's slow wander, which adds 3.5-5 points beside any
+// effect, as much as a 4-6 kW drift effect beside a slew limit adds.)
 int without_immaterial_drift(const DiagnoseResult& r, int i, double min_gain) {
   const auto& h = r.hypotheses[static_cast<std::size_t>(i)];
   if (h.effects.size() != 2 || h.effects[1].effect != Effect::kDrift) return i;
-  bool material_alone = false;
+  bool drift_immaterial = false;
   int single = -1;
   for (std::size_t j = 0; j < r.hypotheses.size(); ++j) {
     const auto& g = r.hypotheses[j];
     if (g.effects.size() != 1) continue;
-    if (g.effects[0].effect == Effect::kDrift) material_alone = !immaterial_drift(g, r.problem);
+    if (g.effects[0].effect == Effect::kDrift) drift_immaterial = immaterial_drift(g, r.problem);
     if (single < 0 && g.effects[0].effect == h.effects[0].effect &&
         g.effects[0].place == h.effects[0].place && g.score >= min_gain)
       single = static_cast<int>(j);  // the same effect at the same place
   }
-  if (single < 0 || material_alone) return i;
-  const auto& alone = r.hypotheses[static_cast<std::size_t>(single)];
-  return h.validation_fit_after - alone.validation_fit_after >= kDriftMaterialGainPct ? i : single;
+  return drift_immaterial && single >= 0 ? single : i;
 }
 
 }  // namespace rig::diagnose

@@ -10,7 +10,7 @@ namespace rig::diagnose {
 // A drift alone (h's only effect) that is not material; false for any other hypothesis.
 bool immaterial_drift(const HypothesisFit& h, const Problem& problem);
 
-// Hypothesis i of r if it is not a pair "effect + drift", or if its drift is material: else
+// Hypothesis i of r unless it is a pair "effect + drift" whose drift alone is immaterial: then
 // the same effect at the same place alone, when that scores min_gain_pct.
 int without_immaterial_drift(const DiagnoseResult& r, int i, double min_gain_pct);
 

@@ -152,29 +152,6 @@ std::vector<HypothesisFit> behind_disturbance(const Problem& pr, const Location&
   return screen_and_refine(pr, cands, base, o, kRefinedBehindDisturbance);
 }
 
-// A drift that the best single's residual shows and the baseline's did not: the effect's own
-// residual hid it from the drift test (its share of the residual's variance is small beside
-// it). The best single is fitted again beside a drift seeded from what it leaves (droopsim
-// d077, a slew limit inside the loop with a 4-6 kW wander: the baseline's residual shows a
-// drift share of 0.13, under the test's bound). The verdict keeps such a drift only when it is
-// material beside the effect (drift_materiality.hpp).
-std::vector<HypothesisFit> with_hidden_drift(const Problem& pr, const Location& loc,
-                                             const std::vector<HypothesisFit>& singles,
-                                             const Eigen::VectorXd& base,
-                                             const DiagnoseOptions& o) {
-  const bool in_pool = o.effects.empty() || std::find(o.effects.begin(), o.effects.end(),
-                                                      Effect::kDrift) != o.effects.end();
-  if (!o.try_pairs || !in_pool || loc.dist.drift || singles.empty()) return {};
-  const HypothesisFit& best = singles.front();
-  if (best.effects.size() != 1 || !has_input_side(best) || gated(pr, best)) return {};
-  const Location left = locate(pr, best.yhat);
-  if (!left.dist.drift) return {};
-  Candidate paired;
-  for (const auto& start : placed_starts(Effect::kDrift, Place::kInput, pr, left))
-    paired.push_back({best.effects[0], start.front()});
-  return fit_all(pr, {paired}, base, o);
-}
-
 }  // namespace
 
 // The problem with the effects acting on h's span only (an onset found for h).
@@ -261,7 +238,6 @@ std::vector<HypothesisFit> search_hypotheses(const Problem& pr, const Location& 
   std::vector<HypothesisFit> hs = search_singles(pr, loc, base, o, false);
   // Added last: the pair searches below take the singles' disturbances one at a time.
   std::vector<HypothesisFit> lines = both_disturbances(pr, hs, base, o);
-  for (auto& h : with_hidden_drift(pr, loc, hs, base, o)) lines.push_back(std::move(h));
   const auto done = [&](std::vector<HypothesisFit> more) {
     for (auto* add : {&more, &lines})
       for (auto& h : *add) hs.push_back(std::move(h));

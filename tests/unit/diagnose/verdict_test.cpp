@@ -267,17 +267,17 @@ TEST(Verdict, AnEffectThatAddsNothingBesideAnImmaterialDriftIsNotNamed) {
   EXPECT_EQ(choose(r, thresholds::kMinGainPct), 0);
 }
 
-// A drift within the transducer's accuracy (immaterial alone) that raises the validation fit
-// by 3 points beside an effect is kept beside it; adding less, the effect is named alone
-// (droopsim d077, a slew limit inside the loop with a 4-6 kW wander: the drift, hidden from
-// the baseline's drift test by the limit's residual, adds 6.8 points beside it).
-TEST(Verdict, ADriftThatRaisesTheFitBesideAnEffectIsKeptBesideIt) {
+// A drift immaterial alone is not named beside an effect, however much it adds there: every
+// droopsim record carries the grid's slow wander, which adds 3.5-5 points beside any effect
+// (seed 4 d025, a smoke limiter in a plain record: 3.7), as much as a 4-6 kW drift effect
+// beside a slew limit does (d077: 4.4-9.4). With no drift fitted alone, the pair stands.
+TEST(Verdict, ADriftImmaterialAloneIsNotNamedBesideAnEffect) {
   DiagnoseResult r;
   r.problem.y = white(1000, 10.0, 31);
   r.problem.y_level = 1100.0;
   r.problem.scales.z_std = 12.0;
   r.location.input_mismatch = true;
-  const AppliedEffect limit{Effect::kGainChange, {0.8}, Place::kInput, {}};
+  const AppliedEffect gain{Effect::kGainChange, {0.8}, Place::kInput, {}};
   const AppliedEffect drift{Effect::kDrift, {5.0}, Place::kInput, {}};
   const auto hypothesis = [](std::vector<AppliedEffect> effects, double after) {
     HypothesisFit h;
@@ -287,17 +287,16 @@ TEST(Verdict, ADriftThatRaisesTheFitBesideAnEffectIsKeptBesideIt) {
     h.score = after - 62.6;
     return h;
   };
-  r.hypotheses = {hypothesis({limit, drift}, 85.4), hypothesis({limit}, 78.6)};
+  r.hypotheses = {hypothesis({gain, drift}, 85.4), hypothesis({gain}, 78.6)};
   r.hypotheses[0].derived = {{"drift_rms", 2.09}, {"drift_rms_worst_half", 2.16}};
   EXPECT_EQ(choose(r, thresholds::kMinGainPct), 0);
-  // Beside an immaterial drift alone, as much again.
+  // Within 0.2 % of the 1100 kW level alone (2.2 kW): the effect alone.
   r.hypotheses.push_back(hypothesis({drift}, 63.6));
   r.hypotheses[2].derived = {{"drift_rms", 2.0}, {"drift_rms_worst_half", 2.1}};
-  EXPECT_EQ(choose(r, thresholds::kMinGainPct), 0);
-  // Adding 2 points: the effect alone.
-  r.hypotheses[0].validation_fit_after = 80.6;
-  r.hypotheses[0].score = 18.0;
   EXPECT_EQ(choose(r, thresholds::kMinGainPct), 1);
+  // Material alone (3 % of the level): the pair.
+  r.hypotheses[2].derived = {{"drift_rms", 33.0}, {"drift_rms_worst_half", 34.0}};
+  EXPECT_EQ(choose(r, thresholds::kMinGainPct), 0);
 }
 
 // A level step that the gain change of the dynamics after it matches is a gain change from
