@@ -151,8 +151,9 @@ double direction_beyond_lag_z(const Problem& pr, const Eigen::VectorXd& residual
 struct LevelTest {
   std::vector<LevelBin> by_level;
   double chi2 = 0.0;
-  // Beyond chi^2(4) at 1e-4 with the outer bands' gains apart (AmplitudeLocation::
-  // amplitude_dependent).
+  // chi2 beyond chi2_bound, and the outer bands' gains more than kAmplitudeMinSpread apart.
+  bool exceeds(double chi2_bound) const;
+  // Beyond chi^2(4) at 1e-4 (AmplitudeLocation::amplitude_dependent).
   bool fires() const;
 };
 LevelTest level_test(const Problem& pr, const Eigen::VectorXd& residual,

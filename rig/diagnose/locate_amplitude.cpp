@@ -123,13 +123,13 @@ LevelTest level_test_on(const Problem& pr, const Rows& rows) {
     const double lo = b == 0 ? -1.0 : edges[bi - 1], hi = edges[bi];
     for (Eigen::Index k = 0; k < n; ++k) {
       const double au = std::abs(pr.u(k));
-      if (au <= lo || au > hi) continue;
+      if (!(au > lo && au <= hi)) continue;
       ub(k) = pr.u(k);
       if (k >= rows.from && k < to) level_ss[bi] += au * au, level_n[bi] += 1.0;
     }
     xl.col(b) = rows.of(masked_response(pr, ub));
   }
-  const double c = static_cast<double>(rows.m) / rows.n_eff;
+  const double c = rows.c;
   const Ls one = least_squares(rows.yh, rows.r), full = least_squares(xl, rows.r);
   const double s2 = full.rss / std::max(1.0, rows.n_eff - kLevelBands);
   LevelTest out;
@@ -145,10 +145,12 @@ LevelTest level_test_on(const Problem& pr, const Rows& rows) {
 
 }  // namespace
 
-bool LevelTest::fires() const {
-  return by_level.size() >= 2 && chi2 > kLevelChi2Bound &&
+bool LevelTest::exceeds(double chi2_bound) const {
+  return by_level.size() >= 2 && chi2 > chi2_bound &&
          std::abs(by_level.back().gain - by_level.front().gain) > thresholds::kAmplitudeMinSpread;
 }
+
+bool LevelTest::fires() const { return exceeds(kLevelChi2Bound); }
 
 LevelTest level_test(const Problem& pr, const Eigen::VectorXd& r_all, const Eigen::VectorXd& yh_all,
                      Eigen::Index from, Eigen::Index to) {

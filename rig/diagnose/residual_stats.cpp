@@ -6,9 +6,16 @@
 
 #include "rig/diagnose/blocks.hpp"
 #include "rig/diagnose/locate.hpp"
+#include "rig/model/transfer_function.hpp"
 #include "rig/signal/ac_coupling.hpp"
 
 namespace rig::diagnose {
+namespace {
+
+// Fewer samples than this carry no amplitude or direction test.
+constexpr Eigen::Index kMinAmplitudeSamples = 64;
+
+}  // namespace
 
 double quantile(std::vector<double> v, double q) {
   if (v.empty()) return 0.0;
@@ -56,8 +63,8 @@ std::optional<Rows> rows_of(const Problem& pr, const Eigen::VectorXd& r_all,
   const Eigen::Index m = (to < 0 ? n : std::min(to, n)) - from;
   if (m < kMinAmplitudeSamples) return std::nullopt;
   Rows rows{from, m, detrend(pr, r_all).segment(from, m), detrend(pr, yh_all).segment(from, m)};
-  rows.n_eff =
-      static_cast<double>(m) / bartlett_factor(rows.r, rows.yh, std::min<Eigen::Index>(200, m / 4));
+  rows.c = bartlett_factor(rows.r, rows.yh, std::min<Eigen::Index>(200, m / 4));
+  rows.n_eff = static_cast<double>(m) / rows.c;
   return rows;
 }
 

@@ -35,19 +35,16 @@ Eigen::VectorXd detrend(const Problem& pr, const Eigen::VectorXd& x);
 // detrended.
 Eigen::VectorXd masked_response(const Problem& pr, const Eigen::VectorXd& u);
 
-// Fewer samples than this carry no amplitude or direction test.
-inline constexpr Eigen::Index kMinAmplitudeSamples = 64;
-
-// The rows [from, to) (to < 0: the end) past the warm-up: r and yh detrended there, and the
-// effective number of samples (Bartlett).
+// The rows [from, to) (to < 0: the end) past the warm-up: r and yh detrended there, their
+// Bartlett factor c and the effective number of samples m / c.
 struct Rows {
   Eigen::Index from = 0, m = 0;
   Eigen::VectorXd r, yh;
-  double n_eff = 0.0;
+  double c = 1.0, n_eff = 0.0;
   // x's rows of the span.
   Eigen::VectorXd of(const Eigen::VectorXd& x) const { return x.segment(from, m); }
 };
-// Nothing when fewer rows than an amplitude test needs.
+// Nothing when fewer rows than an amplitude test needs (64).
 std::optional<Rows> rows_of(const Problem& pr, const Eigen::VectorXd& r_all,
                             const Eigen::VectorXd& yh_all, Eigen::Index from, Eigen::Index to);
 

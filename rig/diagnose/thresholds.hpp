@@ -91,7 +91,7 @@ inline constexpr Eigen::Index kGainPeakSpanMinSamples = 16 * 64;
 // 100 Hz) still finer than a mode's half-power width.
 inline constexpr Eigen::Index kGainPeakCoarserBy = 4;
 
-// --- Location (locate.cpp, locate_time.cpp, locate_amplitude.cpp; docs/diagnose.md step 2)
+// --- Location (locate*.cpp; docs/diagnose.md Method step 2) ---
 // A residual spectral line: its PSD bin exceeds this many times the median of its
 // neighbours' (8 bins each side, the adjacent ones left out). The median of a chi^2(2 M)
 // periodogram's neighbours is steady; a factor 12 above it is beyond the Welch estimate's
@@ -200,7 +200,7 @@ inline constexpr std::size_t kRefinedBehindDisturbance = 3;
 // grid's wander adds 6.6 points that the tests, their bounds widened by the wander, missed.
 inline constexpr double kUnseenInputGainPct = 3.0;
 
-// --- Drift materiality (diagnose.cpp) ---
+// --- Drift materiality (drift_materiality.cpp) ---
 // A drift alone is material when its rms is at least this fraction of the input-driven
 // response's: a slow wander of a few kW on a set excited by +-3 % is the operating noise of
 // a running set (every plant recording has some), not a missing effect.

@@ -28,7 +28,7 @@ void after_fit(const Problem& pr, const Params& p, Eigen::VectorXd& yhat, Derive
   const Eigen::VectorXd d = smooth_zero_phase(pr.y - yhat, p[0], pr.dt_s);
   yhat += d;
   derived.emplace_back("drift_rms", std::sqrt(d.array().square().mean()));
-  // A drift present in part of the record is judged where it is (verdict.cpp): the larger
+  // A drift present in part of the record is judged where it is (drift_materiality.cpp): the larger
   // of the two halves' rms.
   const Eigen::Index half = d.size() / 2;
   const auto rms_of = [](const auto& x) {

@@ -238,8 +238,17 @@ TEST(Locate, TheLevelTestOverRowsSeesALevelDependentGainOnlyWhereItIs) {
   EXPECT_TRUE(second.fires()) << second.chi2;
   ASSERT_EQ(second.by_level.size(), 5u);
   EXPECT_GT(second.by_level.back().gain, second.by_level.front().gain + 0.1);
+  // The whole record's is the location's, bin for bin.
   const LevelTest whole = level_test(pr, r, yhat, 0, -1);
-  EXPECT_DOUBLE_EQ(whole.chi2, locate_amplitude(pr, r, yhat).level_chi2);
+  const AmplitudeLocation amp = locate_amplitude(pr, r, yhat);
+  EXPECT_EQ(whole.chi2, amp.level_chi2);
+  EXPECT_EQ(whole.fires(), amp.amplitude_dependent);
+  ASSERT_EQ(whole.by_level.size(), amp.by_level.size());
+  for (std::size_t b = 0; b < amp.by_level.size(); ++b) {
+    EXPECT_EQ(whole.by_level[b].gain, amp.by_level[b].gain);
+    EXPECT_EQ(whole.by_level[b].gain_std, amp.by_level[b].gain_std);
+    EXPECT_EQ(whole.by_level[b].level, amp.by_level[b].level);
+  }
 }
 
 }  // namespace

@@ -288,7 +288,6 @@ TEST(Verdict, ADriftImmaterialAloneIsNotNamedBesideAnEffect) {
     return h;
   };
   r.hypotheses = {hypothesis({gain, drift}, 85.4), hypothesis({gain}, 78.6)};
-  r.hypotheses[0].derived = {{"drift_rms", 2.09}, {"drift_rms_worst_half", 2.16}};
   EXPECT_EQ(choose(r, thresholds::kMinGainPct), 0);
   // Within 0.2 % of the 1100 kW level alone (2.2 kW): the effect alone.
   r.hypotheses.push_back(hypothesis({drift}, 63.6));
@@ -297,6 +296,47 @@ TEST(Verdict, ADriftImmaterialAloneIsNotNamedBesideAnEffect) {
   // Material alone (3 % of the level): the pair.
   r.hypotheses[2].derived = {{"drift_rms", 33.0}, {"drift_rms_worst_half", 34.0}};
   EXPECT_EQ(choose(r, thresholds::kMinGainPct), 0);
+}
+
+// A static map from an onset: the level test on its own span waives the nonlinear margin
+// where the whole record's is diluted (docs/diagnose.md step 4; droopsim seed 7 d032, a
+// deadband from 100 s). Here the whole record's evidence is taken away, and the response to
+// the larger half of |u| doubled from half-way: a deadband gated there is named over a gain
+// change 0.3 points under it; the same deadband over the whole record is not.
+TEST(Verdict, ALevelMapFromAnOnsetIsShownByTheLevelTestOnItsSpan) {
+  DiagnoseResult r;
+  DiagnoseInput in = null_record(43);
+  int blocks = 0;
+  Eigen::Index warm = 0;
+  r.problem = prepare_problem(in, &blocks, &warm);
+  Problem& pr = r.problem;
+  const Eigen::Index n = pr.y.size(), half = n / 2;
+  const double median = [&] {
+    std::vector<double> mags(pr.u.data(), pr.u.data() + n);
+    for (double& m : mags) m = std::abs(m);
+    std::nth_element(mags.begin(), mags.begin() + half, mags.end());
+    return mags[static_cast<std::size_t>(half)];
+  }();
+  const Eigen::VectorXd large =
+      pr.u.unaryExpr([median](double v) { return std::abs(v) > median ? v : 0.0; });
+  pr.y.tail(n - half) += model::simulate(pr.tf, large, pr.dt_s).tail(n - half);
+  r.baseline_yhat = model_output(pr, {}).yhat;
+  r.location = locate(pr, r.baseline_yhat);
+  r.location.input_mismatch = true;
+  r.location.amp.level_chi2 = 0.0;  // the whole record's test diluted
+  HypothesisFit deadband, gain;
+  deadband.effects = {AppliedEffect{Effect::kDeadband, {0.3 * median}, Place::kInput, {}}};
+  deadband.score = 5.0;
+  deadband.active_from = half;
+  deadband.active_to = pr.active_to;
+  gain.effects = {AppliedEffect{Effect::kGainChange, {1.2}, Place::kInput, {}}};
+  gain.score = 4.7;
+  gain.active_from = pr.active_from;
+  gain.active_to = pr.active_to;
+  r.hypotheses = {deadband, gain};
+  EXPECT_EQ(choose(r, thresholds::kMinGainPct), 0);
+  r.hypotheses[0].active_from = pr.active_from;  // over the whole record: the margin holds
+  EXPECT_EQ(choose(r, thresholds::kMinGainPct), 1);
 }
 
 // A level step that the gain change of the dynamics after it matches is a gain change from
