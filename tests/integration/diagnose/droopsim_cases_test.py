@@ -65,6 +65,8 @@ judged against droopsim's own truth.
     test beyond a lag fails, and `backlash` within 20 %;
   * a null behind a grid event whose sign test fails over the whole record only (seed 6
     d084, `unexplained` before): `none`, the operating point moved.
+  * a speed-error deadband from 100 s (seed 7 d032, `load_damping` before): `deadband`, the
+    level test on its span waiving the nonlinear margin that the whole record's did not.
 """
 import json
 import os
@@ -210,6 +212,18 @@ class DroopsimCases(unittest.TestCase):
     def test_a_speed_error_deadband_behind_the_wander_is_a_deadband(self):
         truths, rep = self.run_case("deadband", "wander", 682908)
         self.assertGreater(rep["location"]["amplitude"]["level_chi2"], 13.28)
+        self.check_effect(truths, rep, ("deadband",), "half_width")
+
+    def test_a_speed_error_deadband_from_100_s_is_shown_by_the_level_test_on_its_span(self):
+        # Benchmark seed 7 d032: over the whole record the level test does not show the gain
+        # depend on the input's level (the outer levels' gains 1.2 % apart); on the
+        # deadband's span it does, which waives the nonlinear margin (`load_damping` before).
+        truths, rep = self.run_case("deadband", "late", 582887)
+        levels = rep["location"]["amplitude"]["by_level"]
+        whole = (rep["location"]["amplitude"]["level_chi2"] > 13.28
+                 and abs(levels[-1]["gain"] - levels[0]["gain"]) > 0.02)
+        self.assertFalse(whole, "the whole record's level test shows it: not the span's case")
+        self.assertGreater(rep["hypotheses"][rep["chosen"]]["active_span_s"][0], 90.0)
         self.check_effect(truths, rep, ("deadband",), "half_width")
 
     def test_softer_damper_windings_from_100_s_are_a_damping_change(self):
