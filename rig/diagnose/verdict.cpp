@@ -96,10 +96,7 @@ bool play_beyond_lag(const DiagnoseResult& r, const HypothesisFit& h) {
   const Location& loc = r.location;
   if (loc.amp.two_level_input) return false;
   if (loc.amp.direction_beyond_lag_z <= -kDirectionBeyondLagZ) return true;
-  // (Any hypothesis with its span stored, the whole record too, is tested again here on the
-  // baseline's residual rather than the location's: so benchmarked, so kept; a level map's
-  // test below asks for a span of its own.)
-  if (h.active_from <= 0 && h.active_to < 0) return false;
+  if (!spanned_alone(r.problem, h)) return false;
   const Eigen::VectorXd residual = r.problem.y - r.baseline_yhat;
   return direction_beyond_lag_z(r.problem, residual, r.baseline_yhat, h.active_from, h.active_to) <=
          -kDirectionBeyondLagZ;
