@@ -28,6 +28,8 @@ import math
 import numpy as np
 from scipy import optimize, signal
 
+import arith
+
 DT = 0.02            # row period, s (50 Hz)
 H_S = 0.002          # RK4 step
 F_GRID_HZ = 50.0     # the grid's nominal frequency
@@ -155,33 +157,34 @@ def consts(q):
         irc=np.where(rc > 0, 1 / np.where(rc > 0, rc, 1.0), 0.0), wcrank=2 * math.pi * _s(q["rpm"]) / 60)
 
 
-def deriv(x, u, rdel, ma, wgrid, level, c):
+def deriv(x, u, rdel, ma, wgrid, level, c, m=arith.Arrays):
     """x (NX, B); u bias %, rdel delayed rack, ma moving-average power, wgrid grid speed,
-    level the transducer's analogue output (kW, for the AC coupling); c = consts(p)."""
+    level the transducer's analogue output (kW, for the AC coupling); c = consts(p); m the
+    arithmetic (arith.py: arrays, or floats for one parameter set)."""
     wm, xi, xd, do, xa, va, fc, air, we, wf, wg, te, tc, dl, _, xm, z, th = x
     e = c["g1"] * u - c["g2"] * (do - c["r0"]) + 1.0 - wm
     if c["has_db"]:
-        e = np.sign(e) * np.maximum(np.abs(e) - c["db"], 0.0)
+        e = m.sign(e) * m.maximum(abs(e) - c["db"], 0.0)
     dpid = c["kp"] * e + xi - c["kdt"] * (wm - xd)
-    lim = np.minimum(c["lim0"] + c["ksm"] * air, c["xmax"])
+    lim = m.minimum(c["lim0"] + c["ksm"] * air, c["xmax"])
     wind = ((dpid >= lim) & (e > 0)) | ((dpid <= c["xmin"]) & (e < 0))
-    dxi = np.where(wind, 0.0, c["ki"] * e)
+    dxi = m.where(wind, 0.0, c["ki"] * e)
     xr = rdel - c["r_idle"]
     fuel = c["k_map"] * xr * (1.0 + c["q_map"] * xr)
     if c["has_curv"]:
         fuel = fuel + c["curv"] * (rdel - c["r0"]) ** 2
-    fcp = np.maximum(fc, 0.05)
-    tq = fcp * (1.0 - c["eta_k"] * np.exp((1.0 - air / fcp) * c["ieta"]))
+    fcp = m.maximum(fc, 0.05)
+    tq = fcp * (1.0 - c["eta_k"] * m.exp((1.0 - air / fcp) * c["ieta"]))
     if c["has_rip"]:
-        tq = tq + c["rip"] * np.sin(c["rord"] * th)
+        tq = tq + c["rip"] * m.sin(c["rord"] * th)
     t_ef = c["k_ef"] * te + c["c_ef"] * (we - wf)
     t_fg = c["k_c"] * tc + c["c_c"] * (wf - wg)
     slip = wg - wgrid
-    t_gen = c["pmax"] * np.sin(dl) / wg + c["dg"] * slip
-    return np.array([
+    t_gen = c["pmax"] * m.sin(dl) / wg + c["dg"] * slip
+    return m.vector([
         (wf - wm) * c["itsp"], dxi, (wm - xd) * c["itdf"],
-        (np.minimum(dpid, lim) - do) * c["ito"],
-        np.minimum(np.maximum(va, -c["vmax"]), c["vmax"]),
+        (m.minimum(dpid, lim) - do) * c["ito"],
+        m.minimum(m.maximum(va, -c["vmax"]), c["vmax"]),
         c["wa2"] * (do - xa) - c["zwa"] * va,
         (fuel - fc) * c["itc"], (c["a_idle"] + c["a_fuel"] * fc - air) * c["itt"],
         (tq - t_ef) * c["ihe"], (t_ef - t_fg) * c["ihf"], (t_fg - t_gen) * c["ihg"],
@@ -245,15 +248,18 @@ def simulate(u, p, seed=0, onset_s=None, p_after=None, deterministic=False, sett
     n = len(u) + ns
     ub = np.concatenate([np.zeros(ns), np.asarray(u, float)])
     grid, noise, drift, gev, f_meas = _draws(n, ns, p, rng)
-    x = steady_state(p, b)
+    m = arith.Floats if b == 1 else arith.Arrays
+    if b == 1:   # plain floats: indexing numpy arrays would give numpy scalars
+        ub, grid, noise, drift, gev = (v.tolist() for v in (ub, grid, noise, drift, gev))
+    x = m.state(steady_state(p, b))
     cols = np.arange(b)
     nd = int(math.ceil(0.5 / H_S))
-    rack = np.full(b, OP["rack"])
-    hr = np.repeat(rack[None, :], nd, 0)      # rack at step starts: hr[i % nd] at step i
-    hq = np.zeros((nd, b))                    # integral of P_e - p0 at step starts
+    rack = m.num(np.full(b, OP["rack"]))
+    hr = m.rows(rack, nd)                     # rack at step starts: hr[i % nd] at step i
+    hq = m.rows(np.zeros(b), nd)              # integral of P_e - p0 at step starts
     nplay = 5
-    pis = np.repeat(x[IXA][None, :], nplay, 0)
-    pk = rack.copy()
+    pis = m.rows(x[IXA], nplay)
+    pk = rack
     y = np.empty((n, b)); rk = np.empty((n, b)); pe = np.empty((n, b))
     q, c = None, None
     h2, h6 = 0.5 * H_S, H_S / 6.0
@@ -263,33 +269,32 @@ def simulate(u, p, seed=0, onset_s=None, p_after=None, deterministic=False, sett
         new = p_after if (p_after is not None and t_rec >= onset_s) else p
         if new is not q:
             if q is not None:                 # the coupling keeps its torque
-                x[ITC] = x[ITC] * c["k_c"] / shaft_consts(new)[2]
-                pis[:] = x[IXA]
-                pk = rack.copy()
+                x[ITC] = x[ITC] * c["k_c"] / m.num(shaft_consts(new)[2])
+                pis = m.rows(x[IXA], nplay)
+                pk = rack
             q = new
-            c = consts(q)
-            td = [_taps(t_delay(q) / H_S, o) for o in (0.0, 0.5, 1.0)]
-            tm = [_taps(_s(q["t_ma"]) / H_S, o) for o in (0.0, 0.5, 1.0)]
+            c = m.consts(consts(q))
+            td = [m.taps(*_taps(t_delay(q) / H_S, o)) for o in (0.0, 0.5, 1.0)]
+            tm = [m.taps(*_taps(_s(q["t_ma"]) / H_S, o)) for o in (0.0, 0.5, 1.0)]
             scalar_td = np.size(t_delay(q)) == 1
             ima = 1.0 / _s(q["t_ma"])
-            gsd = np.asarray(q["grid_sd_hz"], float)
-            kw = q["p_rated_kw"] * np.asarray(q["gain"], float)
-            dkw = np.asarray(q["drift_kw"], float)
-            rc_on = np.asarray(q["ac_rc_s"], float) > 0
-            pr = np.asarray(q["pi_r"], float)
+            gsd, dkw = m.num(q["grid_sd_hz"]), m.num(q["drift_kw"])
+            kw = q["p_rated_kw"] * m.num(q["gain"])
+            rc_on = m.num(q["ac_rc_s"]) > 0
+            pr = m.num(q["pi_r"])
             has_pi, lin = bool(np.any(pr > 0)), q["pi_lin"]
-            w = np.asarray(q["play"], float)
+            w = m.num(q["play"])
             has_play = bool(np.any(w > 0))
+            noise_kw, qk, pmax = m.num(q["noise_kw"]), m.num(q["quant_kw"]), m.num(q["p_max"])
         analog = kw * x[IXM] + dkw * drift[row]
         if first:
             x[IZ] = analog
             first = False
-        lev = np.where(rc_on, analog - x[IZ], analog) + q["noise_kw"] * noise[row]
-        qk = np.asarray(q["quant_kw"], float)
-        qs = np.where(qk > 0, qk, 1.0)
-        y[row] = np.where(qk > 0, qs * np.round(lev / qs), lev)
+        lev = m.where(rc_on, analog - x[IZ], analog) + noise_kw * noise[row]
+        qs = m.where(qk > 0, qk, 1.0)
+        y[row] = m.where(qk > 0, qs * m.rint(lev / qs), lev)
         rk[row] = rack
-        pe[row] = q["p_max"] * np.sin(x[IDL])
+        pe[row] = pmax * m.sin(x[IDL])
         ui = ub[row]
         dr = dkw * drift[row]
         for s in range(SUB):
@@ -302,28 +307,28 @@ def simulate(u, p, seed=0, onset_s=None, p_after=None, deterministic=False, sett
                 else:
                     rd.append((1 - f) * hr[(i + j) % nd, cols] + f * hr[(i + j + 1) % nd, cols])
                 ma.append((1 - fm) * hq[(i + jm) % nd] + fm * hq[(i + jm + 1) % nd])
-            k1 = deriv(x, ui, rd[0], (x[IQ] - ma[0]) * ima + c["p0"], wg, kw * x[IXM] + dr, c)
-            xs = x + h2 * k1
-            k2 = deriv(xs, ui, rd[1], (xs[IQ] - ma[1]) * ima + c["p0"], wg, kw * xs[IXM] + dr, c)
-            xs = x + h2 * k2
-            k3 = deriv(xs, ui, rd[1], (xs[IQ] - ma[1]) * ima + c["p0"], wg, kw * xs[IXM] + dr, c)
-            xs = x + H_S * k3
-            k4 = deriv(xs, ui, rd[2], (xs[IQ] - ma[2]) * ima + c["p0"], wg, kw * xs[IXM] + dr, c)
-            x = x + h6 * (k1 + 2 * k2 + 2 * k3 + k4)
-            va = np.minimum(np.maximum(x[IVA], -c["vmax"]), c["vmax"])
+            k1 = deriv(x, ui, rd[0], (x[IQ] - ma[0]) * ima + c["p0"], wg, kw * x[IXM] + dr, c, m)
+            xs = m.axpy(x, h2, k1)
+            k2 = deriv(xs, ui, rd[1], (xs[IQ] - ma[1]) * ima + c["p0"], wg, kw * xs[IXM] + dr, c, m)
+            xs = m.axpy(x, h2, k2)
+            k3 = deriv(xs, ui, rd[1], (xs[IQ] - ma[1]) * ima + c["p0"], wg, kw * xs[IXM] + dr, c, m)
+            xs = m.axpy(x, H_S, k3)
+            k4 = deriv(xs, ui, rd[2], (xs[IQ] - ma[2]) * ima + c["p0"], wg, kw * xs[IXM] + dr, c, m)
+            x = m.rk4(x, h6, k1, k2, k3, k4)
+            va = m.minimum(m.maximum(x[IVA], -c["vmax"]), c["vmax"])
             lo, hi = x[IXA] <= c["xmin"], x[IXA] >= c["xmax"]
-            x[IVA] = np.where((lo & (va < 0)) | (hi & (va > 0)), 0.0, va)
-            xa = np.minimum(np.maximum(x[IXA], c["xmin"]), c["xmax"])
+            x[IVA] = m.where((lo & (va < 0)) | (hi & (va > 0)), 0.0, va)
+            xa = m.minimum(m.maximum(x[IXA], c["xmin"]), c["xmax"])
             x[IXA] = xa
             if has_pi:                            # Prandtl-Ishlinskii: plays of r (j+1)/5
                 for jj in range(nplay):
                     rj = pr * ((jj + 1) / nplay)
-                    pis[jj] = np.minimum(np.maximum(pis[jj], xa - rj), xa + rj)
-                hy = lin * xa + (1 - lin) * pis.mean(axis=0)
+                    pis[jj] = m.minimum(m.maximum(pis[jj], xa - rj), xa + rj)
+                hy = lin * xa + (1 - lin) * m.mean(pis)
             else:
                 hy = xa
             if has_play:                          # linkage play between actuator and rack
-                pk = np.minimum(np.maximum(pk, hy - w / 2), hy + w / 2)
+                pk = m.minimum(m.maximum(pk, hy - w / 2), hy + w / 2)
                 rack = pk
             else:
                 rack = hy
