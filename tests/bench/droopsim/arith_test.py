@@ -1,6 +1,6 @@
 #!/usr/bin/python3
-"""droopsim's two arithmetics (arith.py) give the same record: a single parameter set steps
-in plain floats, a batch in numpy columns (the oracle's grids). Each case is simulated alone
+"""droopsim's two arithmetics (../gensim/arith.py) give the same record: a single parameter
+set steps in plain floats, a batch in numpy columns (the oracle's grids). Each case is simulated alone
 and as both columns of a two-column batch (the batch's columns carry the same parameters as
 arrays); the records must agree to rounding: the rack within 1e-9 pu, y (quantised to
 0.5 kW) equal on every row. Covers the governor's deadband, the PI hysteresis, the linkage

@@ -24,11 +24,14 @@ Every parameter may be a numpy array of one batch size (the oracle's grids).
 """
 import argparse
 import math
+import os
+import sys
 
 import numpy as np
 from scipy import optimize, signal
 
-import arith
+sys.path.insert(1, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "gensim"))
+import arith  # noqa: E402  (gensim/arith.py: the arithmetic both simulators step with)
 
 DT = 0.02            # row period, s (50 Hz)
 H_S = 0.002          # RK4 step

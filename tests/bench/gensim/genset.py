@@ -23,6 +23,8 @@ import math
 import numpy as np
 from scipy import linalg, signal
 
+import arith
+
 DT = 0.01            # sample period of the recording, s (100 Hz, as the rig records)
 H_S = 0.005          # RK4 step, s: 4x below the fastest lag (transducer 20 ms)
 BAND_HZ = 4.0        # excitation bandwidth (the rig's Gaussian bias: 4 Hz Butterworth)
@@ -98,36 +100,36 @@ def steady_state(p):
     return x, rack0
 
 
-def fuel_map(rack, rack0, p):
-    return p["k_map"] * (rack - p["r_idle"] + p["kink"] * np.maximum(rack - rack0, 0.0))
+def fuel_map(rack, rack0, p, m=arith.Arrays):
+    return p["k_map"] * (rack - p["r_idle"] + p["kink"] * m.maximum(rack - rack0, 0.0))
 
 
-def deriv(x, bias, rack_del, w_grid, ripple, rack0, p, pf_gov=None):
+def deriv(x, bias, rack_del, w_grid, ripple, rack0, p, pf_gov=None, m=arith.Arrays):
     """Smooth dynamics. bias in %, rack_del the delayed rack, w_grid the grid speed (pu);
-    pf_gov: the power the governor sees (default its transducer state; linearise() opens it)."""
+    pf_gov: the power the governor sees (default its transducer state; linearise() opens it);
+    m the arithmetic (arith.py: arrays, or floats for one parameter set)."""
     wb = 2.0 * math.pi * p["f_grid"]
-    pe = p["p_max"] * np.sin(x[IDL])
+    pe = p["p_max"] * m.sin(x[IDL])
     e = p["p0"] + bias / 100.0 - (x[IPF] if pf_gov is None else pf_gov)
     db = p["deadband"]
-    e = np.sign(e) * np.maximum(np.abs(e) - db, 0.0)
+    e = m.sign(e) * m.maximum(abs(e) - db, 0.0)
     demand = x[IXI] + p["kp"] * e
     wind = ((demand >= p["rack_max"]) & (e > 0)) | ((demand <= p["rack_min"]) & (e < 0))
-    fuel = fuel_map(rack_del, rack0, p)
+    fuel = fuel_map(rack_del, rack0, p, m)
     torque = x[ITQ] * (1.0 - p["k_t"] + p["k_t"] * x[IBO] / p["p0"]) + ripple
     t_sh = p["k_s"] * x[ITH] + p["c_s"] * (x[IWE] - x[IWG])
-    d = np.empty_like(x)
-    d[IXI] = np.where(wind, 0.0, p["ki"] * e)
-    d[IPF] = (pe - x[IPF]) / p["t_pf"]
-    d[IGF] = (demand - x[IGF]) / p["t_gf"]
-    d[IXA] = np.clip((x[IGF] - x[IXA]) / p["t_a"], -p["slew"], p["slew"])
-    d[ITQ] = (fuel - x[ITQ]) / p["t_c"]
-    d[IBO] = (x[ITQ] - x[IBO]) / p["t_t"]
-    d[IWE] = (torque - t_sh) / (2.0 * p["h_e"])
-    d[IWG] = (t_sh - pe / x[IWG] - p["d_g"] * (x[IWG] - w_grid)) / (2.0 * p["h_g"])
-    d[ITH] = wb * (x[IWE] - x[IWG])
-    d[IDL] = wb * (x[IWG] - w_grid)
-    d[IXM] = (pe - x[IXM]) / p["t_m"]
-    return d
+    return m.vector([  # in the order of the state (IXI ... IXM)
+        m.where(wind, 0.0, p["ki"] * e),
+        (pe - x[IPF]) / p["t_pf"],
+        (demand - x[IGF]) / p["t_gf"],
+        m.minimum(m.maximum((x[IGF] - x[IXA]) / p["t_a"], -p["slew"]), p["slew"]),
+        (fuel - x[ITQ]) / p["t_c"],
+        (x[ITQ] - x[IBO]) / p["t_t"],
+        (torque - t_sh) / (2.0 * p["h_e"]),
+        (t_sh - pe / x[IWG] - p["d_g"] * (x[IWG] - w_grid)) / (2.0 * p["h_g"]),
+        wb * (x[IWE] - x[IWG]),
+        wb * (x[IWG] - w_grid),
+        (pe - x[IXM]) / p["t_m"]])
 
 
 def _ou(n, sd, tau, step, rng, b):
@@ -156,16 +158,17 @@ def simulate(u, p, seed=0, onset_s=None, p_after=None, deterministic=False, sett
     n = len(u) + n_settle
     ubig = np.concatenate([np.zeros(n_settle), np.asarray(u, float)])
     sub = int(round(DT / H_S))
+    m = arith.Floats if b == 1 else arith.Arrays
     x, rack0 = steady_state(p)
-    x = np.broadcast_to(x, (NX, b)).copy()
-    rack0 = np.broadcast_to(rack0, (b,)).copy()
+    x = m.state(np.broadcast_to(x, (NX, b)).copy())
+    rack0 = m.num(np.broadcast_to(rack0, (b,)).copy())
     nd = int(math.ceil(1.0 / H_S))  # history of 1 s (dead time up to ~0.9 s)
-    hist = np.repeat(rack0[None, :], nd, axis=0)
+    hist = m.rows(rack0, nd)
     hpos = 0
-    rack = rack0.copy()
-    bw_z = np.zeros(b)
-    xa_prev = x[IXA].copy()
-    rk_play = rack0.copy()
+    rack = rack0
+    bw_z = m.num(np.zeros(b))
+    xa_prev = x[IXA]
+    rk_play = rack0
     if deterministic:
         p = dict(p, grid_sd_hz=0.0, drift_kw=0.0, noise_kw=0.0, quant_kw=0.0)
         if p_after:
@@ -174,69 +177,79 @@ def simulate(u, p, seed=0, onset_s=None, p_after=None, deterministic=False, sett
     grid = _ou(n * sub, 1.0, p["grid_tau_s"], H_S, rng, 1) / p["f_grid"]
     meas_noise = rng.standard_normal((n, 1))
     drift = _ou(n, 1.0, p["drift_tau_s"], DT, rng, 1)
+    if b == 1:  # plain floats: indexing numpy arrays would give numpy scalars
+        grid, meas_noise, drift = (v[:, 0].tolist() for v in (grid, meas_noise, drift))
+        ubig = ubig.tolist()
     y = np.empty((n, b))
     rk = np.empty((n, b))
     pe_out = np.empty((n, b))
     ac_state = None
     q = p
     t_w = 2.0 * math.pi * p["rpm"] / 60.0
+    cols = np.arange(b)
+    qc = m.consts(q)
     for k in range(n):
         t_rec = (k - n_settle) * DT
         if p_after is not None and onset_s is not None and t_rec >= onset_s and q is p:
             q = p_after  # abrupt; the shaft keeps its torque (a coupling's stiffness
-            x[ITH] = x[ITH] * np.asarray(p["k_s"], float) / np.asarray(q["k_s"], float)  # changes)
+            qc = m.consts(q)
+            x[ITH] = x[ITH] * m.num(p["k_s"]) / m.num(q["k_s"])  # changes)
         # sample before the row's bias acts
-        level = q["p_rated_kw"] * q["gain"] * x[IXM]
-        level = level + q["drift_kw"] * drift[k] + q["noise_kw"] * meas_noise[k]
+        level = qc["p_rated_kw"] * qc["gain"] * x[IXM]
+        level = level + qc["drift_kw"] * drift[k] + qc["noise_kw"] * meas_noise[k]
         if np.any(np.asarray(q["ac_rc_s"]) > 0):
-            rc = np.asarray(q["ac_rc_s"], float)
-            a = np.exp(-DT / np.where(rc > 0, rc, 1.0))
+            rc = m.num(q["ac_rc_s"])
+            a = m.exp(-DT / m.where(rc > 0, rc, 1.0))
             if ac_state is None:
-                ac_state = (level.copy(), np.zeros(b))
+                ac_state = (level, m.num(np.zeros(b)))
             prev_in, prev_out = ac_state
-            out = np.where(rc > 0, a * (prev_out + level - prev_in), level)
-            ac_state = (level.copy(), out)
+            out = m.where(rc > 0, a * (prev_out + level - prev_in), level)
+            ac_state = (level, out)
             level = out
-        qk = np.asarray(q["quant_kw"], float)
+        qk = m.num(q["quant_kw"])
         if np.any(qk > 0):
-            qs = np.where(qk > 0, qk, 1.0)
-            level = np.where(qk > 0, qs * np.round(level / qs), level)
+            qs = m.where(qk > 0, qk, 1.0)
+            level = m.where(qk > 0, qs * m.rint(level / qs), level)
         y[k] = level
         rk[k] = rack
-        pe_out[k] = q["p_max"] * np.sin(x[IDL])
+        pe_out[k] = qc["p_max"] * m.sin(x[IDL])
         bias = ubig[k]
+        # delayed rack at the step's middle (linear interpolation in the history)
+        lag = np.asarray(q["t_d"], float) / H_S - 0.5
+        j, f = m.taps(np.floor(lag).astype(int), lag - np.floor(lag))
+        rip_pu = m.num(q["ripple_pu"])
+        z0 = m.num(q["bw_z0"])
+        has_bw = bool(np.any(np.asarray(z0) > 0))
+        w = m.num(q["play"])
+        has_play = bool(np.any(np.asarray(w) > 0))
         for s in range(sub):
             i = k * sub + s
             t = i * H_S
-            wg = 1.0 + q["grid_sd_hz"] * grid[i]
-            # delayed rack at the step's middle (linear interpolation in the history)
-            lag = np.asarray(q["t_d"], float) / H_S - 0.5
-            j = np.floor(lag).astype(int)
-            f = lag - j
-            r1 = hist[(hpos - 1 - j) % nd, np.arange(b)]
-            r2 = hist[(hpos - 2 - j) % nd, np.arange(b)]
+            wg = 1.0 + qc["grid_sd_hz"] * grid[i]
+            if b == 1:
+                r1, r2 = hist[(hpos - 1 - j) % nd], hist[(hpos - 2 - j) % nd]
+            else:
+                r1, r2 = hist[(hpos - 1 - j) % nd, cols], hist[(hpos - 2 - j) % nd, cols]
             rdel = (1 - f) * r1 + f * r2
-            rip = np.asarray(q["ripple_pu"], float) * math.sin(q["ripple_order"] * t_w * t)
-            k1 = deriv(x, bias, rdel, wg, rip, rack0, q)
-            k2 = deriv(x + 0.5 * H_S * k1, bias, rdel, wg, rip, rack0, q)
-            k3 = deriv(x + 0.5 * H_S * k2, bias, rdel, wg, rip, rack0, q)
-            k4 = deriv(x + H_S * k3, bias, rdel, wg, rip, rack0, q)
-            x += (H_S / 6.0) * (k1 + 2 * k2 + 2 * k3 + k4)
-            x[IXA] = np.clip(x[IXA], q["rack_min"], q["rack_max"])
+            rip = rip_pu * math.sin(qc["ripple_order"] * t_w * t)
+            k1 = deriv(x, bias, rdel, wg, rip, rack0, qc, m=m)
+            k2 = deriv(m.axpy(x, 0.5 * H_S, k1), bias, rdel, wg, rip, rack0, qc, m=m)
+            k3 = deriv(m.axpy(x, 0.5 * H_S, k2), bias, rdel, wg, rip, rack0, qc, m=m)
+            k4 = deriv(m.axpy(x, H_S, k3), bias, rdel, wg, rip, rack0, qc, m=m)
+            x = m.rk4(x, H_S / 6.0, k1, k2, k3, k4)
+            x[IXA] = m.minimum(m.maximum(x[IXA], qc["rack_min"]), qc["rack_max"])
             xa = x[IXA]
             rack = xa
-            z0 = np.asarray(q["bw_z0"], float)
-            if np.any(z0 > 0):  # Bouc-Wen (n = 1, beta = gamma = 1/(2 z0)): |z| -> z0
+            if has_bw:  # Bouc-Wen (n = 1, beta = gamma = 1/(2 z0)): |z| -> z0
                 dx = xa - xa_prev
-                zs = np.where(z0 > 0, z0, 1.0)
-                bw_z = bw_z + dx - (np.abs(dx) * bw_z + dx * np.abs(bw_z)) / (2 * zs)
-                al = q["bw_alpha"]
-                rack = np.where(z0 > 0, rack0 + al * (xa - rack0) + (1 - al) * bw_z, xa)
-            w = np.asarray(q["play"], float)
-            if np.any(w > 0):  # linkage play: the rack moves when the actuator takes it up
-                rk_play = np.clip(rk_play, rack - w / 2, rack + w / 2)
-                rack = np.where(w > 0, rk_play, rack)
-            xa_prev = xa.copy()
+                zs = m.where(z0 > 0, z0, 1.0)
+                bw_z = bw_z + dx - (abs(dx) * bw_z + dx * abs(bw_z)) / (2 * zs)
+                al = qc["bw_alpha"]
+                rack = m.where(z0 > 0, rack0 + al * (xa - rack0) + (1 - al) * bw_z, xa)
+            if has_play:  # linkage play: the rack moves when the actuator takes it up
+                rk_play = m.minimum(m.maximum(rk_play, rack - w / 2), rack + w / 2)
+                rack = m.where(w > 0, rk_play, rack)
+            xa_prev = xa
             hist[hpos] = rack
             hpos = (hpos + 1) % nd
     return dict(y=y[n_settle:], rack=rk[n_settle:], pe=pe_out[n_settle:])

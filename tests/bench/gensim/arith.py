@@ -1,8 +1,8 @@
-"""The arithmetic plant.simulate steps with: numpy arrays of one column per parameter set
-(the oracle's grids), or plain floats for a single set, where numpy's per-call overhead on
-one-element arrays made a 150 s record take 22 s. The same expressions run on either, so
-the plant's physics is written once (plant.deriv, plant.simulate); both give the same
-record to rounding (tests/bench/droopsim/arith_test.py)."""
+"""The arithmetic the simulators step with (genset.simulate, droopsim's plant.simulate):
+numpy arrays of one column per parameter set (the oracles' grids), or plain floats for a
+single set, where numpy's per-call overhead on one-element arrays made a 150 s droopsim
+record take 22 s (1 s in floats). The same expressions run on either, so each plant's
+physics is written once; both give the same record (arith_test.py beside each)."""
 import math
 
 import numpy as np
