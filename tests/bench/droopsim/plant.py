@@ -282,10 +282,10 @@ def simulate(u, p, seed=0, onset_s=None, p_after=None, deterministic=False, sett
             scalar_td = np.size(t_delay(q)) == 1
             ima = 1.0 / _s(q["t_ma"])
             gsd, dkw = m.num(q["grid_sd_hz"]), m.num(q["drift_kw"])
-            kw = q["p_rated_kw"] * m.num(q["gain"])
+            kw = m.num(q["p_rated_kw"]) * m.num(q["gain"])
             rc_on = m.num(q["ac_rc_s"]) > 0
             pr = m.num(q["pi_r"])
-            has_pi, lin = bool(np.any(pr > 0)), q["pi_lin"]
+            has_pi, lin = bool(np.any(pr > 0)), m.num(q["pi_lin"])
             w = m.num(q["play"])
             has_play = bool(np.any(w > 0))
             noise_kw, qk, pmax = m.num(q["noise_kw"]), m.num(q["quant_kw"]), m.num(q["p_max"])
@@ -294,8 +294,10 @@ def simulate(u, p, seed=0, onset_s=None, p_after=None, deterministic=False, sett
             x[IZ] = analog
             first = False
         lev = m.where(rc_on, analog - x[IZ], analog) + noise_kw * noise[row]
-        qs = m.where(qk > 0, qk, 1.0)
-        y[row] = m.where(qk > 0, qs * m.rint(lev / qs), lev)
+        if np.any(qk > 0):                    # (floats: no rounding of a value never kept)
+            qs = m.where(qk > 0, qk, 1.0)
+            lev = m.where(qk > 0, qs * m.rint(lev / qs), lev)
+        y[row] = lev
         rk[row] = rack
         pe[row] = pmax * m.sin(x[IDL])
         ui = ub[row]

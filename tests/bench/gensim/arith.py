@@ -86,7 +86,10 @@ class Floats:
 
     @staticmethod
     def mean(rows):
-        return sum(rows) / len(rows)
+        total = 0.0
+        for v in rows:  # left to right, as numpy adds a few rows (sum() compensates from 3.12)
+            total += v
+        return total / len(rows)
 
     @staticmethod
     def axpy(x, h, k):
@@ -99,4 +102,4 @@ class Floats:
 
     @staticmethod
     def taps(j, f):
-        return int(j), float(f)
+        return int(np.asarray(j).flat[0]), float(np.asarray(f).flat[0])

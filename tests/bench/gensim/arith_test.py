@@ -2,7 +2,7 @@
 """gensim's two arithmetics (arith.py) give the same record: a single parameter set steps in
 plain floats, a batch in numpy columns (the oracle's grids). Each case is simulated alone and
 as both columns of a two-column batch (the batch's columns carry the same parameters as
-arrays); the records must agree: the rack within 1e-9 pu, y (quantised to 0.5 kW) equal on
+arrays; and alone with every parameter a one-element array); the records must agree: the rack within 1e-9 pu, y (quantised to 0.5 kW) equal on
 every row. Covers the governor's deadband, the Bouc-Wen hysteresis, the linkage play and the
 slew limit from an onset (the parameter switch), the torque ripple and the AC coupling.
 
@@ -42,8 +42,13 @@ class Arithmetic(unittest.TestCase):
               flush=True)
         for col in range(2):
             self.assertLess(np.max(np.abs(one["rack"][:, 0] - two["rack"][:, col])), 1e-9)
+            self.assertLess(np.max(np.abs(one["pe"][:, 0] - two["pe"][:, col])), 1e-9)
             np.testing.assert_array_equal(one["y"][:, 0], two["y"][:, col])
         self.assertGreater(np.std(one["y"]), 1.0)  # the record moves
+        # every parameter a one-element array: still a single set, stepped in floats
+        arrays = {k: np.array([v]) for k, v in case["p"].items() if not isinstance(v, str)}
+        alone = g.simulate(u, dict(case["p"], **arrays), p_after=case["p_after"], **kw)
+        np.testing.assert_array_equal(one["y"], alone["y"])
 
     def test_governor_deadband(self):
         self.check("deadband", "plain", 13)

@@ -104,7 +104,8 @@ def calibrate_ripple():
     """Measured once on a deterministic 4 s run (the shaft and swing filter the ripple)."""
     global RIPPLE_GAIN_KW_PER_PU
     if RIPPLE_GAIN_KW_PER_PU is None:
-        p = g.with_params(ripple_pu=0.01)
+        # two columns: numpy's arithmetic, which the value was first measured with
+        p = g.with_params(ripple_pu=np.array([0.01, 0.01]))
         r = g.simulate(np.zeros(400), p, deterministic=True)
         y = r["y"][100:, 0]
         RIPPLE_GAIN_KW_PER_PU = (y.max() - y.min()) / 2 / 0.01

@@ -185,7 +185,7 @@ def simulate(u, p, seed=0, onset_s=None, p_after=None, deterministic=False, sett
     pe_out = np.empty((n, b))
     ac_state = None
     q = p
-    t_w = 2.0 * math.pi * p["rpm"] / 60.0
+    t_w = 2.0 * math.pi * float(np.asarray(p["rpm"]).flat[0]) / 60.0
     cols = np.arange(b)
     qc = m.consts(q)
     for k in range(n):
