@@ -1,10 +1,11 @@
 #!/usr/bin/python3
-"""droopsim's two arithmetics (../gensim/arith.py) give the same record: a single parameter
-set steps in plain floats, a batch in numpy columns (the oracle's grids). Each case is simulated alone
-and as both columns of a two-column batch (the batch's columns carry the same parameters as
-arrays; and alone with every parameter a one-element array); the records must agree to rounding: the rack within 1e-9 pu, y (quantised to
-0.5 kW) equal on every row. Covers the governor's deadband, the PI hysteresis, the linkage
-play from an onset (the parameter switch), the torque ripple, the AC coupling and the shaft.
+"""droopsim's two arithmetics (../gensim/arith.py) give the same record: a single parameter set
+steps in plain floats, a batch in numpy columns (the oracle's grids). Each case is simulated
+alone and as both columns of a two-column batch (the batch's columns carry the same
+parameters as arrays; and alone with every parameter a one-element array); the records must
+agree to rounding: the rack within 1e-9 pu, y (quantised to 0.5 kW) equal on every row.
+Covers the governor's deadband, the PI hysteresis, the linkage play from an onset (the
+parameter switch), the torque ripple, the AC coupling and the shaft.
 
     /usr/bin/python3 tests/bench/droopsim/arith_test.py
 """

@@ -1,10 +1,11 @@
 #!/usr/bin/python3
 """gensim's two arithmetics (arith.py) give the same record: a single parameter set steps in
-plain floats, a batch in numpy columns (the oracle's grids). Each case is simulated alone and
-as both columns of a two-column batch (the batch's columns carry the same parameters as
-arrays; and alone with every parameter a one-element array); the records must agree: the rack within 1e-9 pu, y (quantised to 0.5 kW) equal on
-every row. Covers the governor's deadband, the Bouc-Wen hysteresis, the linkage play and the
-slew limit from an onset (the parameter switch), the torque ripple and the AC coupling.
+plain floats, a batch in numpy columns (the oracle's grids). Each case is simulated alone
+and as both columns of a two-column batch (the batch's columns carry the same parameters as
+arrays; and alone with every parameter a one-element array); the records must agree: the
+rack within 1e-9 pu, y (quantised to 0.5 kW) equal on every row. Covers the governor's
+deadband, the Bouc-Wen hysteresis, the linkage play and the slew limit from an onset (the
+parameter switch), the torque ripple and the AC coupling.
 
     /usr/bin/python3 tests/bench/gensim/arith_test.py
 """
