@@ -77,6 +77,17 @@ void fit_output(const Problem& pr, std::span<const AppliedEffect> effects, const
     m.regressors(pr, e->params, x.middleCols(col, m.regressor_columns));
     col += m.regressor_columns;
   }
+  // A disturbance alone acts on the hypothesis's span as an input-side effect does (a line
+  // that starts during the record: a misfire, a ripple from 100 s); beside an input-side
+  // effect the span is that effect's and the disturbance runs through the record.
+  const bool alone = std::none_of(effects.begin(), effects.end(), [](const AppliedEffect& e) {
+    return kind_of(e.effect) != EffectKind::kDisturbance;
+  });
+  if (alone && extra > 0) {
+    const Eigen::Index to = pr.active_to < 0 || pr.active_to > n ? n : pr.active_to;
+    if (pr.active_from > 0) x.block(0, 1, pr.active_from, extra).setZero();
+    if (to < n) x.block(to, 1, n - to, extra).setZero();
+  }
   const OutputClip& clip = pr.output_clip;
   const double clip_y = clip.level - pr.y_level;  // in pr.y's units
   Eigen::VectorXd sw = pr.est_weight.sqrt().matrix();

@@ -145,6 +145,9 @@ std::vector<TimeWindow> locate_time(const Problem& pr, const Eigen::VectorXd& re
 // the whole record's test.
 double direction_beyond_lag_z(const Problem& pr, const Eigen::VectorXd& residual,
                               const Eigen::VectorXd& yhat, Eigen::Index from, Eigen::Index to);
+// The plain direction test (AmplitudeLocation::direction_z) on the rows [from, to) only.
+double direction_z(const Problem& pr, const Eigen::VectorXd& residual, const Eigen::VectorXd& yhat,
+                   Eigen::Index from, Eigen::Index to);
 // The level test (AmplitudeLocation::by_level, level_chi2) on the rows [from, to) only (to <
 // 0: to the end), its bands the quantiles of |u| there: an effect from an onset is diluted in
 // the whole record's test.

@@ -167,6 +167,14 @@ double direction_beyond_lag_z(const Problem& pr, const Eigen::VectorXd& r_all,
   return direction_fit(rows->yh, g_direction, rows->r, rows->n_eff, &g_rate).z;
 }
 
+double direction_z(const Problem& pr, const Eigen::VectorXd& r_all, const Eigen::VectorXd& yh_all,
+                   Eigen::Index from, Eigen::Index to) {
+  const auto rows = rows_of(pr, r_all, yh_all, from, to);
+  if (!rows) return 0.0;
+  const Eigen::VectorXd g_direction = rows->of(masked_response(pr, direction_of(pr.u)));
+  return direction_fit(rows->yh, g_direction, rows->r, rows->n_eff).z;
+}
+
 double sign_z(const Problem& pr, const Eigen::VectorXd& r_all, const Eigen::VectorXd& yh_all,
               Eigen::Index from, Eigen::Index to) {
   const auto rows = rows_of(pr, r_all, yh_all, from, to);

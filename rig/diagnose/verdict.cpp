@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <iterator>
 #include <numbers>
 #include <optional>
 
@@ -28,8 +29,11 @@ using thresholds::kUnseenInputGainPct;
 // follows the output's motion) on the output's.
 bool direction_evidenced(const HypothesisFit& h, const Location& loc) {
   return std::none_of(h.effects.begin(), h.effects.end(), [&](const AppliedEffect& e) {
-    // On a two-level input the input's direction is linear in du/dt: no evidence.
-    const double input_z = loc.amp.two_level_input ? 0.0 : loc.amp.direction_z;
+    // On a two-level input the input's direction is linear in du/dt: no evidence. On the
+    // record, or on the hypothesis's own span.
+    const double input_z = loc.amp.two_level_input ? 0.0
+                                                   : std::max(std::abs(loc.amp.direction_z),
+                                                              std::abs(h.span_direction_z));
     const double z = e.place == Place::kFeedback ? loc.amp.output_direction_z : input_z;
     return effect_model(e.effect).needs_direction_evidence && std::abs(z) < kDirectionEvidenceZ;
   });
@@ -154,6 +158,27 @@ int choose_raw(const DiagnoseResult& r, double min_gain, Only only = Only::kAny)
 }
 
 }  // namespace
+
+void test_direction_on_spans(DiagnoseResult& r) {
+  const Problem& pr = r.problem;
+  if (r.location.amp.two_level_input) return;
+  const Eigen::VectorXd residual = pr.y - r.baseline_yhat;
+  std::vector<std::pair<std::pair<Eigen::Index, Eigen::Index>, double>> done;  // per span
+  for (auto& h : r.hypotheses) {
+    const bool input_play = std::any_of(h.effects.begin(), h.effects.end(), [](const auto& e) {
+      return effect_model(e.effect).needs_direction_evidence && e.place != Place::kFeedback;
+    });
+    if (!input_play || !spanned_alone(pr, h)) continue;
+    const std::pair<Eigen::Index, Eigen::Index> span{h.active_from, h.active_to};
+    auto hit =
+        std::find_if(done.begin(), done.end(), [&](const auto& d) { return d.first == span; });
+    if (hit == done.end()) {
+      done.emplace_back(span, direction_z(pr, residual, r.baseline_yhat, span.first, span.second));
+      hit = std::prev(done.end());
+    }
+    h.span_direction_z = hit->second;
+  }
+}
 
 // The score of the same hypothesis without its input-side effects (0 when it has no
 // disturbance): what a pair's input-side half must add to.
