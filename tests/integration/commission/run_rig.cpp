@@ -9,6 +9,7 @@
 #include <sstream>
 
 #include "rig/model/model_file.hpp"
+#include "tests/support/scratch_dir.hpp"
 
 namespace rig::testing {
 
@@ -23,11 +24,7 @@ std::filesystem::path source_dir() {
 }
 
 std::filesystem::path fresh_dir(const std::string& name) {
-  const auto dir = std::filesystem::temp_directory_path() /
-                   ("rig-commission-" + std::to_string(::getpid()) + "-" + name);
-  std::filesystem::remove_all(dir);
-  std::filesystem::create_directories(dir);
-  return dir;
+  return rig::testing::scratch_dir("rig-commission-", name);
 }
 
 int run_rig(const std::string& args, const std::filesystem::path& log) {

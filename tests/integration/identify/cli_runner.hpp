@@ -13,6 +13,8 @@
 
 #include <gtest/gtest.h>
 
+#include "tests/support/scratch_dir.hpp"
+
 namespace rig::testing {
 
 struct RunResult {
@@ -32,11 +34,7 @@ inline std::string slurp(const std::filesystem::path& p) {
 }
 
 inline std::filesystem::path scratch(const std::string& name) {
-  const auto dir = std::filesystem::temp_directory_path() /
-                   ("rig_identify_" + std::to_string(::getpid()) + "_" + name);
-  std::filesystem::remove_all(dir);
-  std::filesystem::create_directories(dir);
-  return dir;
+  return rig::testing::scratch_dir("rig_identify_", name);
 }
 
 // args are passed through the shell; callers quote paths they build themselves.

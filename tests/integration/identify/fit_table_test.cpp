@@ -35,8 +35,14 @@ constexpr double kDelayAgreementS = 0.001;
 const std::filesystem::path& runs_dir() {
   static const std::filesystem::path dir = [] {
     const auto built = std::filesystem::last_write_time(rig_binary()).time_since_epoch().count();
-    const auto d = std::filesystem::temp_directory_path() /
-                   fmt::format("rig_identify_fit_table_runs_{}", built);
+    const auto tmp = std::filesystem::temp_directory_path();
+    const auto d = tmp / fmt::format("rig_identify_fit_table_runs_{}", built);
+    // An earlier build's runs are stale: removed, so that the folders do not pile up.
+    std::error_code ignored;
+    for (const auto& e : std::filesystem::directory_iterator(tmp, ignored))
+      if (e.path().filename().string().starts_with("rig_identify_fit_table_runs_") &&
+          e.path() != d)
+        std::filesystem::remove_all(e.path(), ignored);
     std::filesystem::create_directories(d);
     const int lock = ::open((d / "lock").c_str(), O_CREAT | O_RDWR, 0644);
     ::flock(lock, LOCK_EX);

@@ -11,7 +11,7 @@ screenshot of the page goes to the work directory.
 
 Environment: RIG_BIN_DIR (build/bin), LIVE_WORK_DIR (keep the files there). About 1 minute.
 """
-import json, os, re, shutil, subprocess, sys, tempfile, time
+import json, os, re, shutil, subprocess, sys, time
 import unittest
 import urllib.error
 import urllib.request
@@ -20,7 +20,10 @@ from pathlib import Path
 HERE = Path(__file__).resolve().parent
 BIN = Path(os.environ.get("RIG_BIN_DIR", HERE.parents[2] / "build" / "bin"))
 RIG = str(BIN / "rig")
-WORK = Path(os.environ.get("LIVE_WORK_DIR") or tempfile.mkdtemp(prefix="live-test-"))
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+import scratch  # noqa: E402  (the work folder, removed on success)
+
+WORK = scratch.work_dir("LIVE_WORK_DIR", "live-test-")
 sys.path.insert(0, str(HERE))
 from cdp import Chromium  # noqa: E402
 
@@ -217,5 +220,4 @@ class MonitorPageTest(unittest.TestCase):
 
 
 if __name__ == "__main__":
-    print(f"work directory: {WORK}")
-    unittest.main(verbosity=2)
+    scratch.main(WORK, "LIVE_WORK_DIR")

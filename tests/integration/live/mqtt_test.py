@@ -9,14 +9,17 @@ same outcome as without it; a rig killed with SIGKILL leaves its last will.
 
 Environment: RIG_BIN_DIR (build/bin), LIVE_WORK_DIR (keep the files there). About 1 minute.
 """
-import json, os, shutil, signal, socket, subprocess, tempfile, time
+import json, os, shutil, signal, socket, subprocess, sys, time
 import unittest
 from pathlib import Path
 
 HERE = Path(__file__).resolve().parent
 BIN = Path(os.environ.get("RIG_BIN_DIR", HERE.parents[2] / "build" / "bin"))
 RIG = str(BIN / "rig")
-WORK = Path(os.environ.get("LIVE_WORK_DIR") or tempfile.mkdtemp(prefix="mqtt-test-"))
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+import scratch  # noqa: E402  (the work folder, removed on success)
+
+WORK = scratch.work_dir("LIVE_WORK_DIR", "mqtt-test-")
 PREFIX = "site/north"
 SET = "set-07"
 
@@ -188,5 +191,4 @@ class MqttTest(unittest.TestCase):
 
 
 if __name__ == "__main__":
-    print(f"work directory: {WORK}")
-    unittest.main(verbosity=2)
+    scratch.main(WORK, "LIVE_WORK_DIR")

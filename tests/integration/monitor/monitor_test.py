@@ -7,7 +7,7 @@ pymodbus governor (tests/integration/governor/governor_server.py) judged from it
 Environment: RIG_BIN_DIR (build/bin), MONITOR_WORK_DIR (keep every run's files there).
 Ends with the unittest summary; about 4 minutes on 2 cores.
 """
-import json, os, shutil, signal, subprocess, sys, tempfile, time
+import json, os, shutil, signal, subprocess, sys, time
 import unittest
 from pathlib import Path
 
@@ -17,7 +17,10 @@ RIG = str(BIN / "rig")
 sys.path.insert(0, str(HERE.parent / "governor"))
 import fault_matrix_test as gov  # noqa: E402  (the independent governor's launcher)
 
-WORK = Path(os.environ.get("MONITOR_WORK_DIR") or tempfile.mkdtemp(prefix="monitor-test-"))
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+import scratch  # noqa: E402  (the work folder, removed on success)
+
+WORK = scratch.work_dir("MONITOR_WORK_DIR", "monitor-test-")
 LEARN = "300"  # shorter than the default 600 s: a CI budget; the bench uses the default
 FAULT_T = 480.0
 
@@ -197,4 +200,4 @@ class MonitorTest(unittest.TestCase):
 
 
 if __name__ == "__main__":
-    unittest.main(verbosity=2)
+    scratch.main(WORK, "MONITOR_WORK_DIR")
