@@ -22,8 +22,8 @@ class ScratchDirs {
   }
 
   std::filesystem::path make(const std::string& prefix, const std::string& name) {
-    const auto dir = std::filesystem::temp_directory_path() /
-                     (prefix + std::to_string(::getpid()) + "-" + name);
+    const auto dir =
+        std::filesystem::temp_directory_path() / (prefix + std::to_string(::getpid()) + "-" + name);
     std::filesystem::remove_all(dir);
     std::filesystem::create_directories(dir);
     const std::lock_guard lock(mutex_);

@@ -1,6 +1,7 @@
 // Runs build/bin/rig (RIG_BIN_DIR) as a child process and captures its output and exit code.
 #pragma once
 
+#include <gtest/gtest.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -10,8 +11,6 @@
 #include <filesystem>
 #include <fstream>
 #include <string>
-
-#include <gtest/gtest.h>
 
 #include "tests/support/scratch_dir.hpp"
 
@@ -41,7 +40,8 @@ inline std::filesystem::path scratch(const std::string& name) {
 inline RunResult run_rig(const std::string& args, const std::filesystem::path& work) {
   const auto out = work / "stdout.txt";
   const auto err = work / "stderr.txt";
-  const std::string command = rig_binary().string() + " " + args + " >" + out.string() + " 2>" + err.string();
+  const std::string command =
+      rig_binary().string() + " " + args + " >" + out.string() + " 2>" + err.string();
   const int status = std::system(command.c_str());
   RunResult r;
   r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
