@@ -5,6 +5,7 @@
 #include <optional>
 
 #include "rig/diagnose/bus_frequency.hpp"
+#include "rig/diagnose/evidence.hpp"
 #include "rig/diagnose/search.hpp"
 #include "rig/diagnose/split.hpp"
 #include "rig/diagnose/timing.hpp"

@@ -33,7 +33,8 @@ constexpr std::array<const EffectModel*, kAllEffects.size()> kTable = {&kDeadTim
                                                                        &kHysteresisEffect,
                                                                        &kMovedModesEffect,
                                                                        &kBoostLimitEffect,
-                                                                       &kCurvatureEffect};
+                                                                       &kCurvatureEffect,
+                                                                       &kSoftLimitEffect};
 
 std::size_t index_of(Effect effect) { return static_cast<std::size_t>(effect); }
 
@@ -65,6 +66,8 @@ std::optional<Effect> effect_from_string(std::string_view word) {
 }
 
 EffectKind kind_of(Effect effect) { return effect_model(effect).kind; }
+
+bool first_form(Effect effect) { return effect_from_string(to_string(effect)) == effect; }
 
 std::size_t acting_params(const AppliedEffect& e) {
   const int n = effect_model(e.effect).params_on_error;

@@ -127,6 +127,9 @@ struct EffectModel {
   // map): the level test's evidence (the gain depends on the input's amplitude, which no
   // linear effect does) lets it be the verdict without the margin over a linear effect.
   bool level_shaped = false;
+  // Whether the fitted effect carries dynamics of its own (an in-loop limiter's recovery, a
+  // boost limiter's air lag), beside its place's; nullptr: a memoryless map.
+  bool (*has_memory)(const AppliedEffect& effect, const DataScales& scales) = nullptr;
   // Whether it sits only in the governor's output stage (a limit that follows the engine's
   // air): then it is tried only after the governor's PI (Place::kPiLoop, kGovernorPi).
   bool governor_only = false;
@@ -144,5 +147,8 @@ std::size_t acting_params(const AppliedEffect& e);
 const EffectModel* effect_model(std::string_view name);
 // In the order of kAllEffects.
 std::span<const EffectModel* const> all_effect_models();
+// Whether effect is the first form of its word (saturation, not its boost limit or soft
+// limit; resonance, not its moved modes): a word's cases are its first form's.
+bool first_form(Effect effect);
 
 }  // namespace rig::diagnose

@@ -44,9 +44,10 @@ enum class Effect {
   kMovedModes,  // "resonance": the model's own two modes moved together (moved_modes.cpp)
   kBoostLimit,  // "saturation": a limit that follows the engine's air (boost_limit.cpp)
   kCurvature,   // "static_nonlinearity": its one-parameter form, a curvature (curvature.cpp)
+  kSoftLimit,   // "saturation": limits whose corners a dither rounds (soft_limit.cpp)
 };
 
-inline constexpr std::array<Effect, 20> kAllEffects = {Effect::kDeadTime,
+inline constexpr std::array<Effect, 21> kAllEffects = {Effect::kDeadTime,
                                                        Effect::kExtraLag,
                                                        Effect::kResonance,
                                                        Effect::kAcCoupling,
@@ -65,7 +66,8 @@ inline constexpr std::array<Effect, 20> kAllEffects = {Effect::kDeadTime,
                                                        Effect::kHysteresis,
                                                        Effect::kMovedModes,
                                                        Effect::kBoostLimit,
-                                                       Effect::kCurvature};
+                                                       Effect::kCurvature,
+                                                       Effect::kSoftLimit};
 
 // DESIGN.md section 9 word ("dead_time", ...).
 const char* to_string(Effect effect);

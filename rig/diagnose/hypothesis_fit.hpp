@@ -32,7 +32,7 @@ struct HypothesisFit {
   model::TransferFunction tf;
   Eigen::Index active_from = 0, active_to = -1;  // span the effect acts on (-1: to the end)
   // The direction test's z on that span, for a play or hysteresis loop with a span of its
-  // own (verdict.hpp test_direction_on_spans; 0 otherwise).
+  // own (evidence.hpp test_direction_on_spans; 0 otherwise).
   double span_direction_z = 0.0;
 
   std::string name() const;  // "dead_time" or "dead_time+drift"

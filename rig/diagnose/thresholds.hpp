@@ -24,6 +24,15 @@ inline constexpr double kPenaltyPctPerParameter = 0.25;
 // 60 ms combustion lag gave its best placed play 0.67 points over the lag, while deadbands
 // and plays beat the best linear effect by 0.86 points or more.
 inline constexpr double kNonlinearOverLinearPct = 0.75;
+// A memoryless static map of the level (EffectModel::level_shaped, not has_memory: a
+// deadband, a plain limit, a curved map) at a place that fits no dynamics of its own (no
+// place parameters: at the input, on the governor's error, at the output) has no lag to
+// stand in for: at one amplitude it is a gain, its describing function. What it adds over a gain
+// change is the dependence on the level itself, and its score has paid for its parameters. It needs
+// one parameter's penalty over the best linear choice, not the placed plays' three (gensim seed 5
+// g034, a deadband on the governor's error from 60 s: 0.60 points over a gain change from the same
+// onset).
+inline constexpr double kStaticMapOverLinearPct = kPenaltyPctPerParameter;
 // Another explanation within this many points of the verdict's score is named beside it in
 // the explanation (report.json "alternative"): the margin a nonlinearity needs over a linear
 // effect, below which the data do not tell two shapes apart.
@@ -123,7 +132,7 @@ inline constexpr double kWindowOverSignalPrediction = 2.25;
 inline constexpr double kAmplitudeMinSpread = 0.02;
 // The level test as evidence that tells a static map of the level (a deadband, a limit, a
 // curved map) from a linear effect fitted as well, once a mismatch is established
-// (verdict.cpp level_evidenced): chi^2(4) at 1e-2, a conventional significance. As a finding
+// (evidence.cpp level_evidenced): chi^2(4) at 1e-2, a conventional significance. As a finding
 // (amplitude_dependent) the test runs on every record beside the other input tests and takes
 // 1e-4 (23.51). Measured: of 160 records with a linear effect (droopsim seeds 1-5, gensim
 // seed 1) and 41 nulls none exceeds 13.28; 31 of 98 with a nonlinearity do.

@@ -8,6 +8,7 @@
 
 #include "rig/diagnose/drift_materiality.hpp"
 #include "rig/diagnose/effect_registry.hpp"
+#include "rig/diagnose/evidence.hpp"
 #include "rig/diagnose/gain_peak.hpp"
 #include "rig/diagnose/placement.hpp"
 
@@ -15,29 +16,13 @@ namespace rig::diagnose {
 namespace {
 
 using thresholds::kDampingOverStiffness;
-using thresholds::kDirectionBeyondLagZ;
-using thresholds::kDirectionEvidenceZ;
 using thresholds::kLagOverDelayMarginPct;
 using thresholds::kNestedMarginPct;
 using thresholds::kNonlinearOverLinearPct;
 using thresholds::kRedampZerosDamping;
 using thresholds::kRedampZerosFrequency;
+using thresholds::kStaticMapOverLinearPct;
 using thresholds::kUnseenInputGainPct;
-
-// Every effect of h that needs the direction test's evidence has it (thresholds.hpp): on
-// the input's direction of motion, or for a loop in an output feedback (a hysteretic spring
-// follows the output's motion) on the output's.
-bool direction_evidenced(const HypothesisFit& h, const Location& loc) {
-  return std::none_of(h.effects.begin(), h.effects.end(), [&](const AppliedEffect& e) {
-    // On a two-level input the input's direction is linear in du/dt: no evidence. On the
-    // record, or on the hypothesis's own span.
-    const double input_z = loc.amp.two_level_input ? 0.0
-                                                   : std::max(std::abs(loc.amp.direction_z),
-                                                              std::abs(h.span_direction_z));
-    const double z = e.place == Place::kFeedback ? loc.amp.output_direction_z : input_z;
-    return effect_model(e.effect).needs_direction_evidence && std::abs(z) < kDirectionEvidenceZ;
-  });
-}
 
 // Every effect's fitted value and place can be a verdict (EffectModel::credible,
 // place_credible): none stopped at a bound as a stand-in for another shape.
@@ -79,55 +64,10 @@ bool sampling_convention_only(const HypothesisFit& h, const Problem& pr) {
 // hysteresis loop (an effect that needs the direction test's evidence).
 enum class Only { kAny, kLinear, kDirection };
 
-bool has_direction_effect(const HypothesisFit& h) {
-  return std::any_of(h.effects.begin(), h.effects.end(), [](const AppliedEffect& e) {
-    return effect_model(e.effect).needs_direction_evidence;
-  });
-}
-
-// Whether h acts on a span of its own (an onset found for it), not the problem's.
-bool spanned_alone(const Problem& pr, const HypothesisFit& h) {
-  const auto end = [&pr](Eigen::Index to) { return to < 0 ? pr.y.size() : to; };
-  return h.active_from != pr.active_from || end(h.active_to) != end(pr.active_to);
-}
-
-// A play's direction effect beyond what any lag or delay adds (thresholds.hpp): the sign of
-// a play's (it subtracts b sign(du/dt) from the input it acts on).
-// On the whole record, or for a hypothesis gated to a span (an effect from an onset) on that
-// span alone: there the whole record's test dilutes it (droopsim seed 2 d037, a play from
-// 102 s: z -2.29 on the record).
-bool play_beyond_lag(const DiagnoseResult& r, const HypothesisFit& h) {
-  const Location& loc = r.location;
-  if (loc.amp.two_level_input) return false;
-  if (loc.amp.direction_beyond_lag_z <= -kDirectionBeyondLagZ) return true;
-  if (!spanned_alone(r.problem, h)) return false;
-  const Eigen::VectorXd residual = r.problem.y - r.baseline_yhat;
-  return direction_beyond_lag_z(r.problem, residual, r.baseline_yhat, h.active_from, h.active_to) <=
-         -kDirectionBeyondLagZ;
-}
-
-// Every nonlinearity of h is a static map of the level (EffectModel::level_shaped) and the
-// location's level test saw the gain depend on the input's amplitude (thresholds.hpp
-// kLevelEvidenceChi2, and the gains' spread): what no gain, lag or delay does, so such a map
-// needs no margin over them (droopsim seed 4 d034, a speed-error deadband behind the grid's
-// wander, level chi^2 40.7: the deadband scored 0.69 points over a gain change with a delay).
-// For a hypothesis gated to a span (an effect from an onset) the test is repeated on that
-// span alone, as the direction test is (play_beyond_lag): the whole record's dilutes it
-// (droopsim seed 7 d032, a deadband from 100 s: chi^2 21.5 but the outer levels' gains 1.2 %
-// apart over the record, 27.2 and 8.2 % on its span).
-bool level_evidenced(const DiagnoseResult& r, const HypothesisFit& h) {
-  const AmplitudeLocation& amp = r.location.amp;
-  const bool level_shaped = std::all_of(h.effects.begin(), h.effects.end(), [](const auto& e) {
-    const EffectKind k = kind_of(e.effect);
-    return (k != EffectKind::kInputNonlinearity && k != EffectKind::kFeedback) ||
-           effect_model(e.effect).level_shaped;
-  });
-  if (amp.two_level_input || !level_shaped) return false;
-  if (LevelTest{amp.by_level, amp.level_chi2}.exceeds(thresholds::kLevelEvidenceChi2)) return true;
-  if (!spanned_alone(r.problem, h)) return false;
-  const Eigen::VectorXd residual = r.problem.y - r.baseline_yhat;
-  return level_test(r.problem, residual, r.baseline_yhat, h.active_from, h.active_to)
-      .exceeds(thresholds::kLevelEvidenceChi2);
+// The margin h's nonlinearity needs over the best linear choice (thresholds.hpp): a static
+// map at a place without dynamics of its own needs less than a play or a placed map.
+double nonlinear_margin(const HypothesisFit& h, const DataScales& scales) {
+  return memoryless_static_maps_only(h, scales) ? kStaticMapOverLinearPct : kNonlinearOverLinearPct;
 }
 
 int choose_raw(const DiagnoseResult& r, double min_gain, Only only = Only::kAny) {
@@ -158,27 +98,6 @@ int choose_raw(const DiagnoseResult& r, double min_gain, Only only = Only::kAny)
 }
 
 }  // namespace
-
-void test_direction_on_spans(DiagnoseResult& r) {
-  const Problem& pr = r.problem;
-  if (r.location.amp.two_level_input) return;
-  const Eigen::VectorXd residual = pr.y - r.baseline_yhat;
-  std::vector<std::pair<std::pair<Eigen::Index, Eigen::Index>, double>> done;  // per span
-  for (auto& h : r.hypotheses) {
-    const bool input_play = std::any_of(h.effects.begin(), h.effects.end(), [](const auto& e) {
-      return effect_model(e.effect).needs_direction_evidence && e.place != Place::kFeedback;
-    });
-    if (!input_play || !spanned_alone(pr, h)) continue;
-    const std::pair<Eigen::Index, Eigen::Index> span{h.active_from, h.active_to};
-    auto hit =
-        std::find_if(done.begin(), done.end(), [&](const auto& d) { return d.first == span; });
-    if (hit == done.end()) {
-      done.emplace_back(span, direction_z(pr, residual, r.baseline_yhat, span.first, span.second));
-      hit = std::prev(done.end());
-    }
-    h.span_direction_z = hit->second;
-  }
-}
 
 // The score of the same hypothesis without its input-side effects (0 when it has no
 // disturbance): what a pair's input-side half must add to.
@@ -366,7 +285,7 @@ int choose(const DiagnoseResult& r, double min_gain) {
   if (has_nonlinearity(at(i)) && !(has_direction_effect(at(i)) && play_beyond_lag(r, at(i))) &&
       !level_evidenced(r, at(i))) {
     const int j = choose_raw(r, min_gain, Only::kLinear);
-    if (j >= 0 && at(j).score >= at(i).score - kNonlinearOverLinearPct) i = j;
+    if (j >= 0 && at(j).score >= at(i).score - nonlinear_margin(at(i), r.problem.scales)) i = j;
   }
   i = account_for_gain_peak(r, i, min_gain);
   return prefer_delay_to_lag(r, without_immaterial_drift(r, i, min_gain), min_gain);

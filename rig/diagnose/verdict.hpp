@@ -20,12 +20,6 @@ bool has_nonlinearity(const HypothesisFit& h);
 // direction tests.
 bool could_be_verdict(const HypothesisFit& h, const Location& location, const DataScales& scales);
 
-// For every play or hysteresis loop (at an input-side place) with a span of its own (an
-// onset found for it), the direction test repeated on that span (span_direction_z): over
-// the whole record an effect from half-way is diluted (gensim seed 5 g044, a hysteresis
-// from 60 s: |z| 2.7 on the record, under the evidence bound).
-void test_direction_on_spans(DiagnoseResult& r);
-
 // The best single score of h's disturbances (0 when it has none): what its input-side
 // effects must add to.
 double disturbance_part_score(const std::vector<HypothesisFit>& hypotheses, const HypothesisFit& h);

@@ -97,6 +97,7 @@ const EffectModel kBoostLimitEffect{
     .explain = meaning,
     .map_to_plant = to_plant,
     .level_shaped = true,
+    .has_memory = [](const AppliedEffect&, const DataScales&) { return true; },  // its air lag
     .governor_only = true,
 };
 

@@ -33,6 +33,7 @@ extern const EffectModel kDriftEffect;
 extern const EffectModel kMovedModesEffect;
 extern const EffectModel kBoostLimitEffect;
 extern const EffectModel kCurvatureEffect;
+extern const EffectModel kSoftLimitEffect;
 
 namespace effects {
 
@@ -81,6 +82,12 @@ double cylinder_factor(const PlantTarget& p);
 double steady_rack_pu(const PlantTarget& p);
 // Rack (pu) per % of bias at the excitation's frequencies: a_r = R K T4 / 100.
 double rack_pu_per_pct(const PlantTarget& p);
+// A limit's sides as gov.tmax_pu, gov.tmin_pu: about the recording's mean input u0 (the
+// operating point diagnose removes) the rack is rack0 + u0 a_r. A side beyond the recorded
+// excursion by more than reach (how far past it the limit still acts: a dither's) never
+// acted, so the fit did not identify it: that side is left as it was.
+void limits_to_plant(const PlantContext& c, PlantTarget& m, double upper_limit,
+                     double lower_limit_magnitude, double reach);
 
 }  // namespace effects
 }  // namespace rig::diagnose

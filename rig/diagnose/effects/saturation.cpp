@@ -61,33 +61,14 @@ std::string meaning(const AppliedEffect& e, const HypothesisFit&, const Problem&
       p[0], p[1], p[0] / su, p[1] / su, effects::in_loop_words(e, 2, pr.scales));
 }
 
-// Limits about the recording's mean input u0 (the operating point diagnose removes): the
-// rack there is rack0 + u0 a_r. A limit beyond the recorded excursion never acted, so the
-// fit did not identify it: that side is left as it was.
 void to_plant(const PlantContext& c, PlantTarget& m) {
-  const auto& p = c.effect.params;
-  const Eigen::VectorXd& u = c.u;
-  const double u0 = u.size() ? u.mean() : 0.0;
-  const double up = u.size() ? u.maxCoeff() - u0 : INFINITY;
-  const double down = u.size() ? u0 - u.minCoeff() : INFINITY;
-  const double a_r = effects::rack_pu_per_pct(m);
-  const double rack = effects::steady_rack_pu(m) + u0 * a_r;
-  const std::pair<const char*, double> sides[] = {{"upper_limit", p[0]},
-                                                  {"lower_limit_magnitude", p[1]}};
-  for (const auto& [word, lim] : sides) {
-    const bool upper = std::string(word) == "upper_limit";
-    const char* key = upper ? "gov.tmax_pu" : "gov.tmin_pu";
-    if (lim >= (upper ? up : down)) {
-      m.note(
-          fmt::format("saturation: {} {:.4g} % lies beyond the recorded input ({:.4g} %); "
-                      "{} left unchanged",
-                      word, lim, upper ? up : down, key));
-      continue;
-    }
-    m.set(key, rack + (upper ? lim : -lim) * a_r, "saturation",
-          fmt::format("rack at the mean bias {:.4g} pu {} {} {:.4g} % x {:.4g} pu/%", rack,
-                      upper ? "+" : "-", word, lim, a_r));
-  }
+  effects::limits_to_plant(c, m, c.effect.params[0], c.effect.params[1], 0.0);
+}
+
+// Inside an integrating loop (recovery_s beyond a sample or two; on the governor's error the
+// loop itself restores the position) the limit holds the position it lost: a memory.
+bool has_memory(const AppliedEffect& e, const DataScales& s) {
+  return !on_error(e.place) && e.params.size() > 2 && e.params[2] > 2.0 * s.dt_s;
 }
 
 bool credible(const AppliedEffect& e, const DataScales& s) {
@@ -110,6 +91,7 @@ const EffectModel kSaturationEffect{
     .explain = meaning,
     .map_to_plant = to_plant,
     .level_shaped = true,
+    .has_memory = has_memory,
     .credible = credible,
 };
 

@@ -12,6 +12,7 @@
 
 #include "concealed.hpp"
 #include "recording_out.hpp"
+#include "rig/diagnose/effect_registry.hpp"
 
 using namespace rig::diagnose;
 
@@ -51,9 +52,8 @@ int main(int argc, char** argv) {
     if (a == "--verbose") verbose = std::string(argv[i + 1]) == "1";
   }
   std::vector<std::optional<Effect>> effects = {std::nullopt};
-  for (Effect e : kAllEffects)  // the moved modes are a second form of resonance, not a case
-    if (e != Effect::kMovedModes && e != Effect::kBoostLimit && e != Effect::kCurvature)
-      effects.push_back(e);
+  for (Effect e : kAllEffects)  // a second form of a word (the moved modes) is not a case
+    if (first_form(e)) effects.push_back(e);
   const Concealment cons[] = {Concealment::kNoise, Concealment::kDrift, Concealment::kAcCoupling,
                               Concealment::kPartial};
   std::vector<Row> rows;

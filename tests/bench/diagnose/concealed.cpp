@@ -100,6 +100,8 @@ std::vector<double> true_params(Effect e, const DataScales& s, const model::Tran
       return {};
     case Effect::kCurvature:  // a second form of static_nonlinearity: its cases are that's
       return {};
+    case Effect::kSoftLimit:  // a third form of saturation: its cases are saturation's
+      return {};
   }
   return {};
 }

@@ -3,7 +3,9 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <random>
 #include <tuple>
+#include <vector>
 
 #include "concealed.hpp"
 #include "rig/diagnose/augmented_model.hpp"
@@ -246,6 +248,45 @@ TEST(Effects, BoostLimitCutsAFastRiseAndLetsASlowOneThrough) {
   const Eigen::VectorXd fixed = boost_limited(ramp, {1.0, 0.0, 1.0});
   EXPECT_DOUBLE_EQ(fixed.maxCoeff(), 1.0);
   EXPECT_DOUBLE_EQ(fixed(999), 1.0);
+}
+
+}  // namespace
+}  // namespace rig::diagnose
+
+namespace rig::diagnose {
+namespace {
+
+// The soft limit (saturation's third form): a dither of rms s rounds the corner of a limit.
+// Checked against the mean of the hard limit over a seeded Gaussian dither, and at its ends.
+TEST(Effects, SoftLimitIsTheHardLimitAveragedOverItsDither) {
+  const EffectModel& m = effect_model(Effect::kSoftLimit);
+  EXPECT_STREQ(m.name, "saturation");
+  EXPECT_TRUE(m.level_shaped);
+  EXPECT_FALSE(first_form(Effect::kSoftLimit));
+  EXPECT_TRUE(first_form(Effect::kSaturation));
+  const Params p = {1.0, 2.0, 0.5};  // +1 / -2 about the operating point, dither 0.5 rms
+  Problem pr;
+  const Eigen::VectorXd v = Eigen::VectorXd::LinSpaced(61, -4.0, 4.0);
+  const Eigen::VectorXd soft = m.apply_input(pr, p, v);
+  // The mean of clamp(v + n) over a seeded dither, less its value at the operating point.
+  std::mt19937_64 rng(20261128);
+  std::normal_distribution<double> dither(0.0, p[2]);
+  std::vector<double> n(200000);
+  for (double& x : n) x = dither(rng);
+  const auto mean_clamped = [&](double x) {
+    double sum = 0.0;
+    for (double d : n) sum += std::clamp(x + d, -p[1], p[0]);
+    return sum / static_cast<double>(n.size());
+  };
+  const double at_zero = mean_clamped(0.0);
+  for (Eigen::Index i = 0; i < v.size(); ++i)
+    EXPECT_NEAR(soft(i), mean_clamped(v(i)) - at_zero, 5e-3) << "at " << v(i);
+  EXPECT_NEAR(m.apply_input(pr, p, Eigen::VectorXd::Zero(1))(0), 0.0, 1e-15);
+  // Far beyond the corners it is flat, as a limit is; a fine dither is the hard limit.
+  EXPECT_NEAR(soft(60) - soft(59), 0.0, 1e-6);
+  const Eigen::VectorXd hard = m.apply_input(pr, {1.0, 2.0, 1e-6}, v);
+  for (Eigen::Index i = 0; i < v.size(); ++i)
+    EXPECT_NEAR(hard(i), std::clamp(v(i), -2.0, 1.0), 1e-6);  // s phi(0) at a corner
 }
 
 }  // namespace

@@ -301,8 +301,9 @@ TEST(Verdict, ADriftImmaterialAloneIsNotNamedBesideAnEffect) {
 // A static map from an onset: the level test on its own span waives the nonlinear margin
 // where the whole record's is diluted (docs/diagnose.md step 4; droopsim seed 7 d032, a
 // deadband from 100 s). Here the whole record's evidence is taken away, and the response to
-// the larger half of |u| doubled from half-way: a deadband gated there is named over a gain
-// change 0.3 points under it; the same deadband over the whole record is not.
+// the larger half of |u| doubled from half-way: a deadband in the loop (behind a front lag,
+// so that the margin applies) gated there is named over a gain change 0.3 points under it;
+// the same deadband over the whole record is not.
 TEST(Verdict, ALevelMapFromAnOnsetIsShownByTheLevelTestOnItsSpan) {
   DiagnoseResult r;
   DiagnoseInput in = null_record(43);
@@ -325,7 +326,7 @@ TEST(Verdict, ALevelMapFromAnOnsetIsShownByTheLevelTestOnItsSpan) {
   r.location.input_mismatch = true;
   r.location.amp.level_chi2 = 0.0;  // the whole record's test diluted
   HypothesisFit deadband, gain;
-  deadband.effects = {AppliedEffect{Effect::kDeadband, {0.3 * median}, Place::kInput, {}}};
+  deadband.effects = {AppliedEffect{Effect::kDeadband, {0.3 * median}, Place::kInLoop, {0.05}}};
   deadband.score = 5.0;
   deadband.active_from = half;
   deadband.active_to = pr.active_to;
@@ -528,13 +529,16 @@ TEST(Verdict, ADisturbanceAloneDoesNotExplainAnAmplitudeFinding) {
 
 // A static map of the level needs no margin over a linear effect when the level test saw the
 // gain depend on the input's amplitude, which no gain, lag or delay does (droopsim seed 4
-// d034, a speed-error deadband behind the grid's wander, level chi^2 40.7: the deadband
-// scored 0.69 points over a gain change with a delay, named `gain_change`).
+// d034, a speed-error deadband in the governor's loop behind the grid's wander, level chi^2
+// 40.7: the deadband scored 0.69 points over a gain change with a delay, named
+// `gain_change`).
 TEST(Verdict, ALevelMapShownByTheLevelTestIsNamedWithoutTheMargin) {
   const auto choice = [](double level_chi2, double spread, bool two_level, Effect map) {
     const AppliedEffect gain{Effect::kGainChange, {0.78}};
     const AppliedEffect delay{Effect::kDeadTime, {0.009}, Place::kError};
-    DiagnoseResult r = ranked({{{{map, {0.27}}}, 14.31}, {{gain, delay}, 13.62}, {{gain}, 12.0}});
+    // loop_static_share, loop_derivative_s, loop_filter_s: a place with dynamics of its own.
+    const AppliedEffect in_loop{map, {0.27}, Place::kGovernorError, {1.0, 0.03, 0.05}};
+    DiagnoseResult r = ranked({{{in_loop}, 14.31}, {{gain, delay}, 13.62}, {{gain}, 12.0}});
     r.location.amp.level_chi2 = level_chi2;
     r.location.amp.by_level = {{0.14, 0.8 - spread, 0.1}, {0.7, 0.7, 0.05}, {1.8, 0.8, 0.02}};
     r.location.amp.two_level_input = two_level;
@@ -552,6 +556,39 @@ TEST(Verdict, ALevelMapShownByTheLevelTestIsNamedWithoutTheMargin) {
   // A play is no map of the level: its evidence is the direction test's.
   EXPECT_EQ(choice(40.7, 0.3, false, Effect::kBacklash), "gain_change");
   EXPECT_EQ(choice(40.7, 0.3, false, Effect::kSaturation), "saturation");
+}
+
+// A static map of the level at a place that fits no dynamics of its own is a gain at any one
+// amplitude: it needs one parameter's penalty over a linear effect, not the margin of a play
+// or a placed map, which can stand in for a lag (thresholds.hpp kStaticMapOverLinearPct;
+// gensim seed 5 g034, a deadband on the governor's error from 60 s, 0.60 points over a gain
+// change from the same onset, was named `gain_change`).
+TEST(Verdict, AStaticMapWithoutDynamicsOfItsOwnNeedsOneParametersPenalty) {
+  const auto choice = [](const AppliedEffect& map, double map_score, double gain_score) {
+    std::vector<std::pair<std::vector<AppliedEffect>, double>> hs{
+        {{map}, map_score}, {{{Effect::kGainChange, {0.84}}}, gain_score}};
+    std::sort(hs.begin(), hs.end(),
+              [](const auto& a, const auto& b) { return a.second > b.second; });
+    DiagnoseResult r = ranked(hs);
+    r.location.amp.level_chi2 = 5.0;  // the level test shows nothing
+    r.location.amp.by_level = {{0.1, 0.6, 0.8}, {0.6, 0.9, 0.1}, {1.4, 0.9, 0.03}};
+    r.location.amp.direction_z = -10.0;  // a play's evidence, not beyond a lag
+    return verdict_of(r.hypotheses[static_cast<std::size_t>(choose(r, 0.2))]);
+  };
+  const AppliedEffect on_error{Effect::kDeadband, {0.14}, Place::kError};
+  const AppliedEffect at_input{Effect::kSaturation, {0.8, 0.5}, Place::kInput};
+  EXPECT_EQ(choice(on_error, 3.86, 3.26), "deadband");
+  EXPECT_EQ(choice(at_input, 3.86, 3.26), "saturation");
+  EXPECT_EQ(choice(on_error, 3.86, 3.70), "gain_change");  // within one parameter's penalty
+  // A place that fits a front lag, a play, a map in the output's feedback and a limit that
+  // recovers keep the margin.
+  EXPECT_EQ(choice({Effect::kDeadband, {0.14}, Place::kInLoop, {0.06}}, 3.86, 3.26), "gain_change");
+  EXPECT_EQ(choice({Effect::kBacklash, {0.14}, Place::kInput}, 3.86, 3.26), "gain_change");
+  // A limit inside an integrating loop (recovery_s 3 s) has a memory of its own.
+  EXPECT_EQ(choice({Effect::kSaturation, {0.8, 0.5, 3.0}, Place::kInput}, 3.86, 3.26),
+            "gain_change");
+  EXPECT_EQ(choice({Effect::kDeadband, {0.14}, Place::kFeedback, {0.5}}, 3.86, 3.26),
+            "gain_change");
 }
 
 // The delay rule holds beside a drift too, and after an immaterial drift is dropped from the
