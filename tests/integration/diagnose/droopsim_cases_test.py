@@ -41,6 +41,9 @@ judged against droopsim's own truth.
     residual correlated with the bias after it only (`unexplained` before); the same on
     benchmark seed 2 (d084), the residual correlated over the whole record only, on neither
     side of the event;
+  * a smoke limiter dithered by the half-order ripple (d075, named `static_nonlinearity`
+    with the ripple before): `saturation` as a limit whose corner the dither rounds, the
+    ripple beside it, its upper limit within 20 %;
   * a transducer's lag with a linkage play (d074, named `extra_lag` in the governor's loop
     before): the lag at the input and `backlash` after the PI, both within 20 %;
   * an injection delay from 100 s (benchmark seed 3 d002, named `extra_lag` in the loop
@@ -310,6 +313,16 @@ class DroopsimCases(unittest.TestCase):
         # Benchmark seed 2 d028: the static map on the governor's PI fitted 3.8 points under
         # the limit that follows the air, and was the verdict before that form.
         self.check_smoke_limiter(*self.run_case("saturation", "load_step", 458572))
+
+    def test_a_smoke_limiter_dithered_by_the_ripple_is_a_saturation_beside_it(self):
+        # Benchmark seed 1 d075: the half-order ripple rounds the limit's corner; a hard limit
+        # fitted 1.9 points under the static map's kink, which was the verdict before the
+        # soft limit (saturation's third form).
+        truths, rep = self.run_case("saturation+periodic_disturbance", "pair", 271073)
+        h = rep["hypotheses"][rep["chosen"]]
+        self.assertEqual({e["effect"] for e in h["effects"]},
+                         {"saturation", "periodic_disturbance"}, rep["explanation"])
+        self.check_effect(truths, rep, ("saturation",), "upper_limit")
 
     def test_a_transducer_lag_and_a_linkage_play_are_named_together(self):
         # Benchmark seed 1 d074: the lag in the governor's loop alone was the verdict, its
