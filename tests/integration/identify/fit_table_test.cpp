@@ -40,8 +40,7 @@ const std::filesystem::path& runs_dir() {
     // An earlier build's runs are stale: removed, so that the folders do not pile up.
     std::error_code ignored;
     for (const auto& e : std::filesystem::directory_iterator(tmp, ignored))
-      if (e.path().filename().string().starts_with("rig_identify_fit_table_runs_") &&
-          e.path() != d)
+      if (e.path().filename().string().starts_with("rig_identify_fit_table_runs_") && e.path() != d)
         std::filesystem::remove_all(e.path(), ignored);
     std::filesystem::create_directories(d);
     const int lock = ::open((d / "lock").c_str(), O_CREAT | O_RDWR, 0644);

@@ -9,8 +9,8 @@
 #include "records.hpp"
 #include "rig/diagnose/blocks.hpp"
 #include "rig/diagnose/diagnose.hpp"
-#include "rig/diagnose/split.hpp"
 #include "rig/diagnose/evidence.hpp"
+#include "rig/diagnose/split.hpp"
 #include "rig/diagnose/verdict.hpp"
 
 namespace rig::diagnose {
