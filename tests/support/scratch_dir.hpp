@@ -1,6 +1,6 @@
 // A test's scratch folder under the system's temp folder, named after the process and the
-// test, made empty. The folders a test program made are removed when it exits with every
-// test it ran passed; a failing run's stay for a look.
+// test, made empty. The folders a test program made (and files named after them beside
+// them) are removed when it exits with every test it ran passed; a failing run's stay.
 #pragma once
 
 #include <gtest/gtest.h>
@@ -35,7 +35,13 @@ class ScratchDirs {
     // The gtest singleton outlives static objects (it is never deleted).
     if (!::testing::UnitTest::GetInstance()->Passed()) return;
     std::error_code ignored;
-    for (const auto& dir : dirs_) std::filesystem::remove_all(dir, ignored);
+    for (const auto& dir : dirs_) {
+      std::filesystem::remove_all(dir, ignored);
+      // and the files a test named after it beside it (dir.log, dir.model.json)
+      const std::string stem = dir.filename().string() + ".";
+      for (const auto& e : std::filesystem::directory_iterator(dir.parent_path(), ignored))
+        if (e.path().filename().string().starts_with(stem)) std::filesystem::remove_all(e, ignored);
+    }
   }
 
  private:
