@@ -130,9 +130,10 @@ struct EffectModel {
   // Whether the fitted effect carries dynamics of its own (an in-loop limiter's recovery, a
   // boost limiter's air lag), beside its place's; nullptr: a memoryless map.
   bool (*has_memory)(const AppliedEffect& effect, const DataScales& scales) = nullptr;
-  // Whether it sits only in the governor's output stage (a limit that follows the engine's
-  // air): then it is tried only after the governor's PI (Place::kPiLoop, kGovernorPi).
-  bool governor_only = false;
+  // The places it is tried at, of those its forms allow (nullptr: all of them). A limit that
+  // follows the engine's air sits only in the governor's output stage: after its PI
+  // (Place::kPiLoop, kGovernorPi).
+  bool (*tried_at)(Place place) = nullptr;
   // Whether a fitted value can be a verdict (nullptr: any can): one whose shape parameter
   // stopped at its bound is the search's best stand-in for some other shape, not an estimate
   // (a resonance at its largest damping ratio is a broad reshaping of the band).

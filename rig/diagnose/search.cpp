@@ -39,7 +39,7 @@ std::vector<Candidate> singles_of(Effect e, const Problem& pr, const Location& l
     if (place == Place::kFeedback && !effect_model(e).in_feedback) continue;
     if (on_error(place) && !effect_model(e).apply_on_error) continue;
     if (after_pi(place) && !effect_model(e).step) continue;
-    if (effect_model(e).governor_only && !after_pi(place)) continue;
+    if (effect_model(e).tried_at && !effect_model(e).tried_at(place)) continue;
     if (feedback_fitted(place) && !governor_loop_possible(pr.tf)) continue;
     // On a two-level input any map of the bias itself acts as a linear one: a static map
     // as a gain and an offset, a play or a slew limit the same on every (equal) step.

@@ -98,7 +98,7 @@ const EffectModel kBoostLimitEffect{
     .map_to_plant = to_plant,
     .level_shaped = true,
     .has_memory = [](const AppliedEffect&, const DataScales&) { return true; },  // its air lag
-    .governor_only = true,
+    .tried_at = after_pi,
 };
 
 }  // namespace rig::diagnose

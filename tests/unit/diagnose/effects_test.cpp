@@ -231,7 +231,9 @@ Eigen::VectorXd boost_limited(const Eigen::VectorXd& x, const Params& p) {
 TEST(Effects, BoostLimitCutsAFastRiseAndLetsASlowOneThrough) {
   const EffectModel& m = effect_model(Effect::kBoostLimit);
   EXPECT_STREQ(m.name, "saturation");
-  EXPECT_TRUE(m.governor_only);
+  ASSERT_NE(m.tried_at, nullptr);
+  EXPECT_TRUE(m.tried_at(Place::kGovernorPi));
+  EXPECT_FALSE(m.tried_at(Place::kInput));
   const Params follows = {1.0, 1.0, 1.0};  // +1 above 1.0 x the demand through a 1 s lag
   // A step of 3 at once: cut to the limit at first, through once the air has caught up.
   Eigen::VectorXd step = Eigen::VectorXd::Constant(1000, 3.0);
