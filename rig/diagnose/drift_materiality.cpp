@@ -62,4 +62,16 @@ int without_immaterial_drift(const DiagnoseResult& r, int i, double min_gain) {
   return drift_immaterial && single >= 0 ? single : i;
 }
 
+const HypothesisFit* set_aside_drift_pair(const DiagnoseResult& r) {
+  const HypothesisFit* h = r.chosen();
+  if (!h || h->effects.size() != 1) return nullptr;
+  for (const auto& g : r.hypotheses) {
+    if (&g == h) return nullptr;  // ranked: none above the chosen
+    if (g.effects.size() == 2 && g.effects[1].effect == Effect::kDrift &&
+        g.effects[0].effect == h->effects[0].effect && g.effects[0].place == h->effects[0].place)
+      return &g;
+  }
+  return nullptr;
+}
+
 }  // namespace rig::diagnose

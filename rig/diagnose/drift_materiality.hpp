@@ -14,4 +14,9 @@ bool immaterial_drift(const HypothesisFit& h, const Problem& problem);
 // the same effect at the same place alone, when that scores min_gain_pct.
 int without_immaterial_drift(const DiagnoseResult& r, int i, double min_gain_pct);
 
+// The pair "chosen effect + drift" ranked above r's chosen single, when the verdict set it
+// aside for its immaterial drift (without_immaterial_drift); else nullptr. The explanation
+// says so, and compares an alternative fitted with the drift against this pair.
+const HypothesisFit* set_aside_drift_pair(const DiagnoseResult& r);
+
 }  // namespace rig::diagnose

@@ -9,6 +9,7 @@
 #include <string>
 
 #include "rig/diagnose/diagnose.hpp"
+#include "rig/diagnose/drift_materiality.hpp"
 #include "rig/diagnose/effect_registry.hpp"
 #include "rig/diagnose/effects/common.hpp"
 #include "rig/diagnose/gain_peak.hpp"
@@ -239,6 +240,13 @@ std::string negligible_disturbance(const DiagnoseResult& r) {
 std::string alternative_words(const DiagnoseResult& r) {
   if (r.alternative_index < 0) return "";
   const HypothesisFit& g = r.hypotheses[static_cast<std::size_t>(r.alternative_index)];
+  // An alternative fitted beside the drift the verdict set aside is compared with the
+  // chosen effect's own pair with it, like with like.
+  const HypothesisFit* pair = set_aside_drift_pair(r);
+  const bool with_drift =
+      pair && std::any_of(g.effects.begin(), g.effects.end(),
+                          [](const AppliedEffect& e) { return e.effect == Effect::kDrift; });
+  const double against = with_drift ? pair->score : r.chosen()->score;
   std::string names;
   for (const auto& e : g.effects) {
     if (kind_of(e.effect) == EffectKind::kDisturbance) continue;
@@ -248,10 +256,10 @@ std::string alternative_words(const DiagnoseResult& r) {
   const std::string a =
       !names.empty() && std::string("aeiou").find(names.front()) != std::string::npos ? "An" : "A";
   std::string s = fmt::format(
-      " {} {} fits {} (validation score {:.2f} against {:.2f}): this recording does not tell "
+      " {} {} fits {} (validation score {:.2f} against {:.2f}{}): this recording does not tell "
       "the two apart.",
-      a, names, g.score > r.chosen()->score ? "as well or better" : "about as well", g.score,
-      r.chosen()->score);
+      a, names, g.score > against ? "as well or better" : "about as well", g.score, against,
+      with_drift ? ", each with the drift beside it" : "");
   if (const auto peak = gain_peak_tells_apart(r, *r.chosen(), g))
     s = fmt::format(
         " {} {} scores {:.2f} against {:.2f} but leaves the gain the data show at {:.2f} Hz "
@@ -377,6 +385,11 @@ std::string explain(const DiagnoseResult& r) {
       "Diagnosis: {}. Adding it raises the validation fit from {:.1f} % to {:.1f} % "
       "(estimation {:.1f} % to {:.1f} %).",
       what, h->validation_fit_before, h->validation_fit_after, h->fit_before, h->fit_after);
+  if (const HypothesisFit* pair = set_aside_drift_pair(r))
+    s += fmt::format(
+        " Fitted with a drift beside it, it scores {:.2f} (validation score; {:.2f} alone); the "
+        "drift alone is within the set's own slow wander, not material, so it is set aside.",
+        pair->score, h->score);
   if (!r.location.input_mismatch && r.location.clip.side == 0 && !has_input_side(*h))
     s += unseen_input_words(r);
   return s + alternative_words(r);

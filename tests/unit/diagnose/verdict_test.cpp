@@ -14,6 +14,7 @@
 #include "records.hpp"
 #include "rig/diagnose/blocks.hpp"
 #include "rig/diagnose/diagnose.hpp"
+#include "rig/diagnose/drift_materiality.hpp"
 #include "rig/diagnose/effect_registry.hpp"
 #include "rig/diagnose/placement.hpp"
 #include "rig/diagnose/search.hpp"
@@ -296,6 +297,46 @@ TEST(Verdict, ADriftImmaterialAloneIsNotNamedBesideAnEffect) {
   // Material alone (3 % of the level): the pair.
   r.hypotheses[2].derived = {{"drift_rms", 33.0}, {"drift_rms_worst_half", 34.0}};
   EXPECT_EQ(choose(r, thresholds::kMinGainPct), 0);
+}
+
+// The same, as the explanation says it: the pair set aside is named with its score, and an
+// alternative fitted beside the drift is compared with that pair, not with the effect alone
+// (gensim seed 5 g029 read "fits as well or better (validation score 11.80 against 2.03)").
+TEST(Verdict, ADriftSetAsideIsSaidAndAnAlternativeWithItIsComparedWithThePair) {
+  DiagnoseResult r;
+  r.problem.y = white(1000, 10.0, 31);
+  r.problem.y_level = 1100.0;
+  r.problem.scales.z_std = 12.0;
+  r.location.input_mismatch = true;
+  const AppliedEffect gain{Effect::kGainChange, {0.8}, Place::kInput, {}};
+  const AppliedEffect lag{Effect::kExtraLag, {0.2}, Place::kInput, {}};
+  const AppliedEffect drift{Effect::kDrift, {5.0}, Place::kInput, {}};
+  const auto hypothesis = [](std::vector<AppliedEffect> effects, double after) {
+    HypothesisFit h;
+    h.effects = std::move(effects);
+    h.validation_fit_before = 62.6;
+    h.validation_fit_after = after;
+    h.score = after - 62.6;
+    return h;
+  };
+  r.hypotheses = {hypothesis({gain, drift}, 85.4), hypothesis({lag, drift}, 85.3),
+                  hypothesis({gain}, 78.6), hypothesis({drift}, 63.6)};
+  r.hypotheses[3].derived = {{"drift_rms", 2.0}, {"drift_rms_worst_half", 2.1}};
+  r.chosen_index = choose(r, thresholds::kMinGainPct);
+  ASSERT_EQ(r.chosen_index, 2);
+  r.verdict = verdict_of(*r.chosen());
+  EXPECT_EQ(set_aside_drift_pair(r), &r.hypotheses[0]);
+  r.alternative_index = close_alternative(r);
+  ASSERT_EQ(r.alternative_index, 1);
+  const std::string text = explain(r);
+  EXPECT_NE(text.find("it scores 22.80 (validation score; 16.00 alone)"), std::string::npos)
+      << text;
+  EXPECT_NE(text.find("about as well (validation score 22.70 against 22.80, each with the drift"),
+            std::string::npos)
+      << text;
+  // Chosen with its drift, nothing was set aside.
+  r.chosen_index = 0;
+  EXPECT_EQ(set_aside_drift_pair(r), nullptr);
 }
 
 // A static map from an onset: the level test on its own span waives the nonlinear margin
