@@ -1,8 +1,10 @@
 #include "rig/diagnose/blocks.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <stdexcept>
+#include <type_traits>
 #include <unsupported/Eigen/MatrixFunctions>
 #include <vector>
 
@@ -126,6 +128,70 @@ Eigen::VectorXd delayed(const Eigen::VectorXd& u, double delay_s, double dt_s) {
   return out;
 }
 
+// One sample step of the loop closed through an output feedback: its state map (row-major
+// phi), input column, output row and direct term.
+struct FeedbackStep {
+  const Eigen::MatrixXd& phi;
+  const Eigen::VectorXd& gamma;
+  const Eigen::RowVectorXd& c;
+  double d0, dt_s;
+};
+
+// The sample loop on plain arrays of N states (compile-time, so that the small products
+// unroll; kDynamicStates: run-time): a general matrix-vector product per sample costs more
+// than the arithmetic of a small state. The sums run in the same order at either size.
+inline constexpr int kDynamicStates = 0;
+inline constexpr int kMaxFixedStates = 14;
+
+template <int N>
+void run_feedback(const FeedbackStep& s, const Eigen::VectorXd& ud,
+                  const OutputFeedback& feedback, Eigen::VectorXd& out) {
+  const auto nn = static_cast<std::size_t>(N == kDynamicStates ? s.phi.rows() : N);
+  using Array = std::conditional_t<N == kDynamicStates, std::vector<double>,
+                                   std::array<double, static_cast<std::size_t>(N)>>;
+  using Square = std::conditional_t<N == kDynamicStates, std::vector<double>,
+                                    std::array<double, static_cast<std::size_t>(N * N)>>;
+  Array g{}, cr{}, x{}, next{};
+  Square p{};
+  if constexpr (N == kDynamicStates) g.resize(nn), cr.resize(nn), x.resize(nn), next.resize(nn),
+                                     p.resize(nn * nn);
+  for (std::size_t i = 0; i < nn; ++i) {
+    const auto ii = static_cast<Eigen::Index>(i);
+    for (std::size_t j = 0; j < nn; ++j) p[i * nn + j] = s.phi(ii, static_cast<Eigen::Index>(j));
+    g[i] = s.gamma(ii);
+    cr[i] = s.c(ii);
+  }
+  const Eigen::Index samples = ud.size();
+  double z_prev = 0.0;
+  for (Eigen::Index k = 0; k < samples; ++k) {
+    double z = 0.0;
+    for (std::size_t i = 0; i < nn; ++i) z += cr[i] * x[i];
+    const double fb = feedback(z, (z - z_prev) / s.dt_s);
+    z_prev = z;
+    const double u_next = k + 1 < samples ? ud(k + 1) : ud(k);
+    out(k) = z + s.d0 * (ud(k) - fb);
+    const double drive = 0.5 * (ud(k) + u_next) - fb;
+    for (std::size_t i = 0; i < nn; ++i) {
+      double sum = g[i] * drive;
+      for (std::size_t j = 0; j < nn; ++j) sum += p[i * nn + j] * x[j];
+      next[i] = sum;
+    }
+    std::swap(x, next);
+  }
+}
+
+template <int N>
+void run_feedback_sized(Eigen::Index n, const FeedbackStep& s, const Eigen::VectorXd& ud,
+                        const OutputFeedback& feedback, Eigen::VectorXd& out) {
+  if constexpr (N > kMaxFixedStates) {
+    run_feedback<kDynamicStates>(s, ud, feedback, out);
+  } else if (n == N) {
+    run_feedback<N>(s, ud, feedback, out);
+  } else {
+    run_feedback_sized<N + 1>(n, s, ud, feedback, out);
+  }
+}
+
 }  // namespace
 
 Eigen::VectorXd simulate_with_feedback(const model::TransferFunction& tf_in,
@@ -153,32 +219,8 @@ Eigen::VectorXd simulate_with_feedback(const model::TransferFunction& tf_in,
   const Eigen::VectorXd gamma = e.topRightCorner(n, 1);
   const double d0 = b(0);
   const Eigen::RowVectorXd c = b.tail(n).transpose() - d0 * tf.den.tail(n).transpose();
-  // Plain arrays (row-major phi): a general matrix-vector product per sample costs more than
-  // the arithmetic of a small state.
-  const auto nn = static_cast<std::size_t>(n);
-  std::vector<double> p(nn * nn), g(nn), cr(nn), x(nn, 0.0), next(nn);
-  for (std::size_t i = 0; i < nn; ++i) {
-    const auto ii = static_cast<Eigen::Index>(i);
-    for (std::size_t j = 0; j < nn; ++j) p[i * nn + j] = phi(ii, static_cast<Eigen::Index>(j));
-    g[i] = gamma(ii);
-    cr[i] = c(ii);
-  }
-  double z_prev = 0.0;
-  for (Eigen::Index k = 0; k < N; ++k) {
-    double z = 0.0;
-    for (std::size_t i = 0; i < nn; ++i) z += cr[i] * x[i];
-    const double fb = feedback(z, (z - z_prev) / dt_s);
-    z_prev = z;
-    const double u_next = k + 1 < N ? ud(k + 1) : ud(k);
-    out(k) = z + d0 * (ud(k) - fb);
-    const double drive = 0.5 * (ud(k) + u_next) - fb;
-    for (std::size_t i = 0; i < nn; ++i) {
-      double s = g[i] * drive;
-      for (std::size_t j = 0; j < nn; ++j) s += p[i * nn + j] * x[j];
-      next[i] = s;
-    }
-    x.swap(next);
-  }
+  FeedbackStep step{phi, gamma, c, d0, dt_s};
+  run_feedback_sized<1>(n, step, ud, feedback, out);
   return out;
 }
 
