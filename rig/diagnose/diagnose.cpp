@@ -103,7 +103,7 @@ DiagnoseResult diagnose(const DiagnoseInput& in, const DiagnoseOptions& o) {
   r.hypotheses = r.location.worth_searching() ? search_hypotheses(pr, r.location, base.yhat, o)
                                               : blind_search(pr, r.location, base.yhat, o);
   test_direction_on_spans(r);
-  r.chosen_index = choose(r, o.min_gain_pct);
+  r.chosen_index = choose(r, o.min_gain_pct, &r.drift_set_aside_index);
   // A verdict's parameters come from a full search, also when the procedure chose one the
   // screen ranked below the refined few.
   if (r.chosen_index >= 0 && r.chosen()->screened_only) {

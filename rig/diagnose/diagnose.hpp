@@ -75,6 +75,9 @@ struct DiagnoseResult {
   int chosen_index = -1;
   // A hypothesis naming another effect that fits about as well (verdict.hpp), -1 for none.
   int alternative_index = -1;
+  // The pair "chosen effect + drift" the verdict set aside for its immaterial drift
+  // (drift_materiality.hpp), -1 for none.
+  int drift_set_aside_index = -1;
 };
 
 // Throws std::invalid_argument (one line) for mismatched lengths, non-finite samples,

@@ -63,15 +63,15 @@ int without_immaterial_drift(const DiagnoseResult& r, int i, double min_gain) {
 }
 
 const HypothesisFit* set_aside_drift_pair(const DiagnoseResult& r) {
-  const HypothesisFit* h = r.chosen();
-  if (!h || h->effects.size() != 1) return nullptr;
-  for (const auto& g : r.hypotheses) {
-    if (&g == h) return nullptr;  // ranked: none above the chosen
-    if (g.effects.size() == 2 && g.effects[1].effect == Effect::kDrift &&
-        g.effects[0].effect == h->effects[0].effect && g.effects[0].place == h->effects[0].place)
-      return &g;
-  }
-  return nullptr;
+  const int i = r.drift_set_aside_index;
+  return i >= 0 && i < static_cast<int>(r.hypotheses.size()) && r.chosen()
+             ? &r.hypotheses[static_cast<std::size_t>(i)]
+             : nullptr;
+}
+
+bool has_drift(const HypothesisFit& h) {
+  return std::any_of(h.effects.begin(), h.effects.end(),
+                     [](const AppliedEffect& e) { return e.effect == Effect::kDrift; });
 }
 
 }  // namespace rig::diagnose

@@ -14,9 +14,12 @@ bool immaterial_drift(const HypothesisFit& h, const Problem& problem);
 // the same effect at the same place alone, when that scores min_gain_pct.
 int without_immaterial_drift(const DiagnoseResult& r, int i, double min_gain_pct);
 
-// The pair "chosen effect + drift" ranked above r's chosen single, when the verdict set it
-// aside for its immaterial drift (without_immaterial_drift); else nullptr. The explanation
-// says so, and compares an alternative fitted with the drift against this pair.
+// The pair "chosen effect + drift" the verdict set aside for its immaterial drift
+// (r.drift_set_aside_index, from choose()); else nullptr. The explanation says so, and an
+// alternative fitted with the drift is judged and compared against this pair.
 const HypothesisFit* set_aside_drift_pair(const DiagnoseResult& r);
+
+// Whether h has a drift among its effects.
+bool has_drift(const HypothesisFit& h);
 
 }  // namespace rig::diagnose

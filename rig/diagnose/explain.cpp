@@ -243,9 +243,7 @@ std::string alternative_words(const DiagnoseResult& r) {
   // An alternative fitted beside the drift the verdict set aside is compared with the
   // chosen effect's own pair with it, like with like.
   const HypothesisFit* pair = set_aside_drift_pair(r);
-  const bool with_drift =
-      pair && std::any_of(g.effects.begin(), g.effects.end(),
-                          [](const AppliedEffect& e) { return e.effect == Effect::kDrift; });
+  const bool with_drift = pair && has_drift(g);
   const double against = with_drift ? pair->score : r.chosen()->score;
   std::string names;
   for (const auto& e : g.effects) {

@@ -264,7 +264,8 @@ int prefer_delay_to_lag(const DiagnoseResult& r, int i, double min_gain) {
   return i;
 }
 
-int choose(const DiagnoseResult& r, double min_gain) {
+int choose(const DiagnoseResult& r, double min_gain, int* drift_set_aside) {
+  if (drift_set_aside) *drift_set_aside = -1;
   if (const int j = step_gain_choice(r, min_gain); j >= 0) return j;
   int i = choose_raw(r, min_gain);
   if (i < 0) return i;
@@ -288,7 +289,10 @@ int choose(const DiagnoseResult& r, double min_gain) {
     if (j >= 0 && at(j).score >= at(i).score - nonlinear_margin(at(i), r.problem.scales)) i = j;
   }
   i = account_for_gain_peak(r, i, min_gain);
-  return prefer_delay_to_lag(r, without_immaterial_drift(r, i, min_gain), min_gain);
+  const int alone = without_immaterial_drift(r, i, min_gain);
+  const int out = prefer_delay_to_lag(r, alone, min_gain);
+  if (drift_set_aside && alone != i && out == alone) *drift_set_aside = i;
+  return out;
 }
 
 int close_alternative(const DiagnoseResult& r) {
@@ -300,9 +304,13 @@ int close_alternative(const DiagnoseResult& r) {
     return word;
   };
   const std::string word = family(verdict_of(*h));
+  // One fitted beside the drift the verdict set aside is judged against that pair.
+  const HypothesisFit* pair = set_aside_drift_pair(r);
   for (std::size_t j = 0; j < r.hypotheses.size(); ++j) {
     const auto& g = r.hypotheses[j];
     if (g.score < h->score - thresholds::kCloseAlternativePct) break;  // ranked
+    if (pair && has_drift(g) && g.score < pair->score - thresholds::kCloseAlternativePct)
+      continue;
     if (static_cast<int>(j) == r.chosen_index || !has_input_side(g) ||
         family(verdict_of(g)) == word || !could_be_verdict(g, r.location, r.problem.scales))
       continue;

@@ -24,8 +24,10 @@ bool could_be_verdict(const HypothesisFit& h, const Location& location, const Da
 // effects must add to.
 double disturbance_part_score(const std::vector<HypothesisFit>& hypotheses, const HypothesisFit& h);
 
-// The index of the chosen hypothesis in r.hypotheses (ranked), -1 for none.
-int choose(const DiagnoseResult& r, double min_gain_pct);
+// The index of the chosen hypothesis in r.hypotheses (ranked), -1 for none; when it is an
+// effect alone because its pair with an immaterial drift was set aside, that pair's index in
+// *drift_set_aside (else -1).
+int choose(const DiagnoseResult& r, double min_gain_pct, int* drift_set_aside = nullptr);
 
 // The best hypothesis that names another effect, could be a verdict and scores within
 // kCloseAlternativePct of the chosen one (or more, when a margin rule chose): the data do

@@ -261,6 +261,14 @@ namespace {
 // The soft limit (saturation's third form): a dither of rms s rounds the corner of a limit.
 // Checked against the mean of the hard limit over a seeded Gaussian dither, and at its ends.
 TEST(Effects, SoftLimitIsTheHardLimitAveragedOverItsDither) {
+  // Tried where a ripple reaches a limit: the bias's path, the governor's error and PI output
+  // with the loop's feedback fitted (soft_limit.cpp tried_at).
+  const auto tried_at = effect_model(Effect::kSoftLimit).tried_at;
+  ASSERT_NE(tried_at, nullptr);
+  for (Place p : {Place::kInput, Place::kGovernorError, Place::kGovernorPi})
+    EXPECT_TRUE(tried_at(p)) << to_string(p);
+  for (Place p : {Place::kInLoop, Place::kOutput, Place::kError, Place::kPiLoop})
+    EXPECT_FALSE(tried_at(p)) << to_string(p);
   const EffectModel& m = effect_model(Effect::kSoftLimit);
   EXPECT_STREQ(m.name, "saturation");
   EXPECT_TRUE(m.level_shaped);

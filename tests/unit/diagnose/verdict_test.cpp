@@ -322,7 +322,7 @@ TEST(Verdict, ADriftSetAsideIsSaidAndAnAlternativeWithItIsComparedWithThePair) {
   r.hypotheses = {hypothesis({gain, drift}, 85.4), hypothesis({lag, drift}, 85.3),
                   hypothesis({gain}, 78.6), hypothesis({drift}, 63.6)};
   r.hypotheses[3].derived = {{"drift_rms", 2.0}, {"drift_rms_worst_half", 2.1}};
-  r.chosen_index = choose(r, thresholds::kMinGainPct);
+  r.chosen_index = choose(r, thresholds::kMinGainPct, &r.drift_set_aside_index);
   ASSERT_EQ(r.chosen_index, 2);
   r.verdict = verdict_of(*r.chosen());
   EXPECT_EQ(set_aside_drift_pair(r), &r.hypotheses[0]);
@@ -334,8 +334,16 @@ TEST(Verdict, ADriftSetAsideIsSaidAndAnAlternativeWithItIsComparedWithThePair) {
   EXPECT_NE(text.find("about as well (validation score 22.70 against 22.80, each with the drift"),
             std::string::npos)
       << text;
-  // Chosen with its drift, nothing was set aside.
-  r.chosen_index = 0;
+  // An alternative with the drift is judged against the pair: 7 points under it is none,
+  // though within the margin of the effect alone.
+  r.hypotheses[1].score = 15.5;
+  r.alternative_index = close_alternative(r);
+  EXPECT_EQ(r.alternative_index, -1);
+  // Chosen with its drift (a material one), nothing was set aside.
+  r.hypotheses[3].derived = {{"drift_rms", 33.0}, {"drift_rms_worst_half", 34.0}};
+  r.chosen_index = choose(r, thresholds::kMinGainPct, &r.drift_set_aside_index);
+  EXPECT_EQ(r.chosen_index, 0);
+  EXPECT_EQ(r.drift_set_aside_index, -1);
   EXPECT_EQ(set_aside_drift_pair(r), nullptr);
 }
 
