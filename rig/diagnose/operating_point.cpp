@@ -23,6 +23,7 @@
 #include <optional>
 
 #include "rig/diagnose/diagnose.hpp"
+#include "rig/diagnose/evidence.hpp"
 #include "rig/diagnose/locate.hpp"
 #include "rig/diagnose/thresholds.hpp"
 #include "rig/diagnose/verdict.hpp"
@@ -67,6 +68,16 @@ std::optional<OperatingPointMove> operating_point_moved(const DiagnoseResult& r)
                             worse.cross_ratio,
                             worse.cross_threshold,
                             sign_z_sides};
+}
+
+// Droopsim seed 9 d084, a grid event at 95 s on the curved fuel map: a curvature on the
+// governor's error scored 2.04 points (quadratic_rel 0.15, the level test's chi^2 11.2 under
+// its 13.28), the residual correlated after the event only. The move's own words say what
+// it is; naming the map would name the operating point's change as an effect.
+bool map_of_the_move(const DiagnoseResult& r) {
+  const HypothesisFit* h = r.chosen();
+  return h && has_nonlinearity(*h) && memoryless_static_maps_only(*h, r.problem.scales) &&
+         !level_evidenced(r, *h) && operating_point_moved(r).has_value();
 }
 
 }  // namespace rig::diagnose

@@ -40,6 +40,11 @@ int close_alternative(const DiagnoseResult& r);
 // side alone (operating_point.cpp), if that is what the record shows.
 std::optional<OperatingPointMove> operating_point_moved(const DiagnoseResult& r);
 
+// Whether r's chosen hypothesis is a memoryless static map of the level that the level test
+// did not show, beside such a move (operating_point.cpp): the curved map's answer at the new
+// operating point, which the move already accounts for, not a missing effect.
+bool map_of_the_move(const DiagnoseResult& r);
+
 // The verdict word of a chosen hypothesis.
 std::string verdict_of(const HypothesisFit& h);
 

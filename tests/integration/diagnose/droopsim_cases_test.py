@@ -68,6 +68,8 @@ judged against droopsim's own truth.
     test beyond a lag fails, and `backlash` within 20 %;
   * a null behind a grid event whose sign test fails over the whole record only (seed 6
     d084, `unexplained` before): `none`, the operating point moved.
+  * a null behind a grid event on which a curvature fits the gain's change across the event
+    (seed 9 d084, `static_nonlinearity` before): `none`, the operating point moved.
   * a speed-error deadband from 100 s (seed 7 d032, `load_damping` before): `deadband`, the
     level test on its span waiving the nonlinear margin that the whole record's did not.
 """
@@ -188,6 +190,19 @@ class DroopsimCases(unittest.TestCase):
         self.assertTrue(rep["bus_frequency"]["operating_point_move"], rep["explanation"])
         self.assertTrue(rep["location"]["amplitude"]["sign_dependent"])
         self.assertIn("on neither side alone", rep["explanation"])
+
+    def test_a_curved_map_that_only_the_grid_events_move_shows_is_none(self):
+        # Benchmark seed 9 d084 (no effect): a fall at 95 s on the curved fuel map. A
+        # curvature on the governor's error fitted 2.04 points from the gain's change across
+        # the event alone (the level test's chi^2 11.2, under its evidence bound) and was the
+        # verdict (`static_nonlinearity`): the operating point moved, no effect is missing.
+        _, rep = self.run_case("none", "load_step", 380760)
+        self.assertEqual(rep["verdict"], "none", rep["explanation"])
+        self.assertTrue(rep["bus_frequency"]["operating_point_move"], rep["explanation"])
+        self.assertLess(rep["location"]["amplitude"]["level_chi2"], 13.28)
+        best_map = max((h["score"] for h in rep["hypotheses"]
+                        if h["effects"][0]["effect"] == "static_nonlinearity"), default=0.0)
+        self.assertGreater(best_map, 0.2, "the curvature still fits; the rule is what names it")
 
     def test_a_combustion_lag_inside_the_speed_loop_is_a_lag_there(self):
         self.check_lag(*self.run_case("extra_lag", "plain", 187690), place="governor_loop")
