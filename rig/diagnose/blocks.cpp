@@ -144,8 +144,8 @@ inline constexpr int kDynamicStates = 0;
 inline constexpr int kMaxFixedStates = 14;
 
 template <int N>
-void run_feedback(const FeedbackStep& s, const Eigen::VectorXd& ud,
-                  const OutputFeedback& feedback, Eigen::VectorXd& out) {
+void run_feedback(const FeedbackStep& s, const Eigen::VectorXd& ud, const OutputFeedback& feedback,
+                  Eigen::VectorXd& out) {
   const auto nn = static_cast<std::size_t>(N == kDynamicStates ? s.phi.rows() : N);
   using Array = std::conditional_t<N == kDynamicStates, std::vector<double>,
                                    std::array<double, static_cast<std::size_t>(N)>>;
@@ -153,8 +153,10 @@ void run_feedback(const FeedbackStep& s, const Eigen::VectorXd& ud,
                                     std::array<double, static_cast<std::size_t>(N * N)>>;
   Array g{}, cr{}, x{}, next{};
   Square p{};
-  if constexpr (N == kDynamicStates) g.resize(nn), cr.resize(nn), x.resize(nn), next.resize(nn),
-                                     p.resize(nn * nn);
+  if constexpr (N == kDynamicStates) {
+    for (Array* v : {&g, &cr, &x, &next}) v->resize(nn);
+    p.resize(nn * nn);
+  }
   for (std::size_t i = 0; i < nn; ++i) {
     const auto ii = static_cast<Eigen::Index>(i);
     for (std::size_t j = 0; j < nn; ++j) p[i * nn + j] = s.phi(ii, static_cast<Eigen::Index>(j));

@@ -309,8 +309,7 @@ int close_alternative(const DiagnoseResult& r) {
   for (std::size_t j = 0; j < r.hypotheses.size(); ++j) {
     const auto& g = r.hypotheses[j];
     if (g.score < h->score - thresholds::kCloseAlternativePct) break;  // ranked
-    if (pair && has_drift(g) && g.score < pair->score - thresholds::kCloseAlternativePct)
-      continue;
+    if (pair && has_drift(g) && g.score < pair->score - thresholds::kCloseAlternativePct) continue;
     if (static_cast<int>(j) == r.chosen_index || !has_input_side(g) ||
         family(verdict_of(g)) == word || !could_be_verdict(g, r.location, r.problem.scales))
       continue;

@@ -65,6 +65,22 @@ TEST(Blocks, FeedbackSimulationWithoutFeedbackMatchesExactSimulation) {
   EXPECT_LT((exact - loop).norm() / exact.norm(), 5e-3);
 }
 
+// Above the fixed state sizes (14) the loop runs at run-time size: the same answer. Sixteen
+// lags of 0.5 s in series (a unit static gain; faster ones take the monic denominator beyond
+// what a companion matrix holds, as in model::simulate's scaled time).
+TEST(Blocks, FeedbackSimulationAboveTheFixedSizesMatchesExactSimulation) {
+  Eigen::VectorXd den = v({1.0});
+  for (int i = 0; i < 16; ++i) den = poly_multiply(den, v({0.5, 1.0}));
+  const model::TransferFunction tf{v({1.0}), den, 0.0};
+  signal::GaussianOptions go;
+  go.n = 6000, go.dt_s = 0.01, go.bandwidth_hz = 0.5, go.seed = 5;
+  const Eigen::VectorXd u = signal::gaussian_excitation(go);
+  const Eigen::VectorXd exact = model::simulate(tf, u, 0.01);
+  const Eigen::VectorXd loop =
+      simulate_with_feedback(tf, u, 0.01, [](double, double) { return 0.0; });
+  EXPECT_LT((exact - loop).norm() / exact.norm(), 5e-3);
+}
+
 TEST(Blocks, CubicFeedbackStiffensTheResponse) {
   model::TransferFunction tf{v({1.0}), v({1.0, 0.5, 1.0}), 0.0};  // unit static gain
   const Eigen::VectorXd u = Eigen::VectorXd::Constant(8000, 2.0);
