@@ -14,6 +14,7 @@
 namespace rig::diagnose {
 namespace {
 
+using thresholds::kLongScreenSearchedStarts;
 using thresholds::kPolishEvaluations;
 using thresholds::kScreenEvaluations;
 using thresholds::kScreenMaxDecimation;
@@ -126,7 +127,10 @@ std::vector<HypothesisFit> screen_and_refine(const Problem& pr, const std::vecto
                                              std::size_t refine) {
   DiagnoseOptions screen = o;
   screen.fit.max_evaluations = std::min(o.fit.max_evaluations, kScreenEvaluations);
-  const Problem coarse = decimated(pr, screen_decimation(pr));
+  const int f = screen_decimation(pr);
+  if (f > 1)
+    screen.fit.searched_starts = std::min(o.fit.searched_starts, kLongScreenSearchedStarts);
+  const Problem coarse = decimated(pr, f);
   std::vector<HypothesisFit> hs = fit_all(coarse, cands, model_output(coarse, {}).yhat, screen);
   rank(hs);
   const std::size_t k = std::min(hs.size(), refine);
