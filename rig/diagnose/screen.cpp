@@ -120,8 +120,9 @@ std::vector<HypothesisFit> fit_all(const Problem& pr, const std::vector<Candidat
   return out;
 }
 
-// Every single hypothesis is fitted with a short search (a screen), and the best few are
-// then searched in full from where the screen stopped (thresholds.hpp).
+// Every single hypothesis is fitted with a short search (a screen; on a long record from
+// its best start only), and the best few are then searched in full from where the screen
+// stopped (thresholds.hpp).
 std::vector<HypothesisFit> screen_and_refine(const Problem& pr, const std::vector<Candidate>& cands,
                                              const Eigen::VectorXd& base, const DiagnoseOptions& o,
                                              std::size_t refine) {

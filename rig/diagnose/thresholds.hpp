@@ -163,15 +163,16 @@ inline constexpr double kScreenOversampling = 6.0;
 inline constexpr int kScreenMaxDecimation = 8;
 // On such a record every full search (the refined singles, the pairs) also runs on the
 // decimated samples, and is then polished on the whole record from where it stopped with at
-// most this many simulations: two to six Levenberg-Marquardt steps of a 2-7 parameter
-// hypothesis, enough to take up the decimation's few per cent (40 before: the same verdicts
-// on the long records of docs/diagnose.md "Speed", the polish a fifth of their time).
-inline constexpr int kPolishEvaluations = 20;
+// most this many simulations: a few Levenberg-Marquardt steps of a 2-7 parameter hypothesis,
+// enough to take up the decimation's few per cent (a 10-minute 100 Hz record: the search's
+// simulations cost a third, docs/diagnose.md "Speed"). 20 is not enough: EMPS's pulses
+// record (24 841 samples) then chose a worse-fitting pair (87.3 % against 90.2 %).
+inline constexpr int kPolishEvaluations = 40;
 // On such a record the screen searches each single from its best starting point only (3
 // otherwise, FitOptions::searched_starts): every start is still evaluated once, and over
 // ten minutes that first evaluation tells them apart. The screen cost 60-70 % of a 600 s
-// record's time; with one start the 600 s records take what the 120 s ones do (on ten 600 s
-// gensim records and 75 of gensim seed 3's cases at 600 s, docs/diagnose.md "Speed").
+// record's time (on ten 600 s gensim records and the 83 cases of gensim seed 3's list at
+// 600 s every verdict is that of three starts, docs/diagnose.md "Speed").
 inline constexpr std::size_t kLongScreenSearchedStarts = 1;
 
 // --- A two-level input (locate.hpp two_level_input) ---
