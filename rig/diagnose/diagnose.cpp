@@ -104,7 +104,10 @@ DiagnoseResult diagnose(const DiagnoseInput& in, const DiagnoseOptions& o) {
                                               : blind_search(pr, r.location, base.yhat, o);
   test_direction_on_spans(r);
   r.chosen_index = choose(r, o.min_gain_pct, &r.drift_set_aside_index);
-  if (map_of_the_move(r)) r.chosen_index = r.drift_set_aside_index = -1;
+  if (map_of_the_move(r))
+    r.chosen_index = r.drift_set_aside_index = -1;
+  else if (r.chosen_index < 0 && !operating_point_moved(r))
+    r.chosen_index = explains_below_min_gain(r);
   // A verdict's parameters come from a full search, also when the procedure chose one the
   // screen ranked below the refined few.
   if (r.chosen_index >= 0 && r.chosen()->screened_only) {

@@ -390,6 +390,12 @@ std::string explain(const DiagnoseResult& r) {
         pair->score, h->score);
   if (!r.location.input_mismatch && r.location.clip.side == 0 && !has_input_side(*h))
     s += unseen_input_words(r);
+  if (r.location.input_mismatch && h->score < thresholds::kMinGainPct)
+    s += fmt::format(
+        " It scores {:.2f}, under the {:.1f} asked, but its residual is no longer correlated "
+        "with the input: the rest of the residual, which the fit's points are measured "
+        "against, is not the input's.",
+        h->score, thresholds::kMinGainPct);
   return s + alternative_words(r);
 }
 

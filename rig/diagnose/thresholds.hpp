@@ -16,6 +16,10 @@ inline constexpr double kMinGainPct = 0.2;
 // over-fitting and the simpler hypothesis wins (the default of
 // FitOptions::penalty_pct_per_parameter).
 inline constexpr double kPenaltyPctPerParameter = 0.25;
+// Below kMinGainPct a hypothesis is still the verdict when the input tests failed, nothing
+// reached kMinGainPct, and it scores above this and leaves a residual independent of the
+// input (verdict.cpp explains_below_min_gain): its parameters paid for themselves.
+inline constexpr double kExplainedBelowMinGainPct = 0.0;
 
 // An input-side nonlinearity is the verdict only when it scores this much more than the
 // best hypothesis without one: at one amplitude a play or a hysteresis inside the loop acts

@@ -45,6 +45,11 @@ std::optional<OperatingPointMove> operating_point_moved(const DiagnoseResult& r)
 // operating point, which the move already accounts for, not a missing effect.
 bool map_of_the_move(const DiagnoseResult& r);
 
+// When nothing is chosen although the input tests failed: the best input-side hypothesis
+// that scores above kExplainedBelowMinGainPct (its input-side part too) and leaves a residual
+// independent of the input (verdict.cpp), -1 for none.
+int explains_below_min_gain(const DiagnoseResult& r);
+
 // The verdict word of a chosen hypothesis.
 std::string verdict_of(const HypothesisFit& h);
 

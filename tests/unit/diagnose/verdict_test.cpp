@@ -347,6 +347,49 @@ TEST(Verdict, ADriftSetAsideIsSaidAndAnAlternativeWithItIsComparedWithThePair) {
   EXPECT_EQ(set_aside_drift_pair(r), nullptr);
 }
 
+// Under the minimum gain, when the input tests failed and nothing reached it: a linear
+// effect scoring above zero whose residual is independent of the input is named (the
+// residual's tests run on the hypothesis's output: here the record itself, a residual of
+// white noise); one scoring below zero, a pair whose input-side half adds nothing to its
+// disturbance, a nonlinearity without the level's evidence, and anything when the input
+// tests passed are not (gensim_cases_test.py: an 8 % gain on a 600 s record).
+TEST(Verdict, UnderTheMinimumGainALinearEffectThatExplainsTheInputTestsIsNamed) {
+  DiagnoseResult r;
+  r.problem.dt_s = 0.01;
+  r.problem.u = white(2000, 1.0, 41);
+  r.problem.y = white(2000, 10.0, 43);
+  r.problem.est_weight = Eigen::VectorXd::Ones(2000);
+  r.problem.val_weight = Eigen::VectorXd::Ones(2000);
+  r.problem.scales.z_std = 12.0;
+  r.location.input_mismatch = true;
+  r.location.tests.auto_corr = Eigen::VectorXd::Zero(21);
+  const auto hypothesis = [&r](std::vector<AppliedEffect> effects, double score) {
+    HypothesisFit h;
+    h.effects = std::move(effects);
+    h.score = score;
+    h.yhat = Eigen::VectorXd::Zero(r.problem.y.size());
+    return h;
+  };
+  const AppliedEffect gain{Effect::kGainChange, {0.9}, Place::kInput, {}};
+  r.hypotheses = {hypothesis({gain}, 0.13)};
+  EXPECT_EQ(choose(r, thresholds::kMinGainPct), -1);
+  EXPECT_EQ(explains_below_min_gain(r), 0);
+  // Its residual still carrying the input: not explained.
+  r.hypotheses[0].yhat = -3.0 * r.problem.u;
+  EXPECT_EQ(explains_below_min_gain(r), -1);
+  r.hypotheses[0].yhat.setZero();
+  r.hypotheses[0].score = -0.05;
+  EXPECT_EQ(explains_below_min_gain(r), -1);
+  const AppliedEffect drift{Effect::kDrift, {5.0}, Place::kInput, {}};
+  r.hypotheses = {hypothesis({drift}, 0.15), hypothesis({gain, drift}, 0.12)};
+  EXPECT_EQ(explains_below_min_gain(r), -1);
+  r.hypotheses = {hypothesis({{Effect::kDeadband, {0.1}, Place::kInput, {}}}, 0.13)};
+  EXPECT_EQ(explains_below_min_gain(r), -1);
+  r.hypotheses = {hypothesis({gain}, 0.13)};
+  r.location.input_mismatch = false;
+  EXPECT_EQ(explains_below_min_gain(r), -1);
+}
+
 // A static map from an onset: the level test on its own span waives the nonlinear margin
 // where the whole record's is diluted (docs/diagnose.md step 4; droopsim seed 7 d032, a
 // deadband from 100 s). Here the whole record's evidence is taken away, and the response to
