@@ -107,7 +107,7 @@ DiagnoseResult diagnose(const DiagnoseInput& in, const DiagnoseOptions& o) {
   if (map_of_the_move(r))
     r.chosen_index = r.drift_set_aside_index = -1;
   else if (r.chosen_index < 0 && !operating_point_moved(r))
-    r.chosen_index = explains_below_min_gain(r);
+    r.explained_below_min_gain = (r.chosen_index = explains_below_min_gain(r)) >= 0;
   // A verdict's parameters come from a full search, also when the procedure chose one the
   // screen ranked below the refined few.
   if (r.chosen_index >= 0 && r.chosen()->screened_only) {
@@ -117,6 +117,10 @@ DiagnoseResult diagnose(const DiagnoseInput& in, const DiagnoseOptions& o) {
     h.evaluations += screened;
   }
   if (r.chosen_index >= 0) keep_pair_estimate(r, base.yhat, o);
+  // The rule's own conditions, again on the hypothesis as refitted.
+  if (r.explained_below_min_gain && !(r.chosen()->score > thresholds::kExplainedBelowMinGainPct &&
+                                      explains(pr, *r.chosen(), r.location)))
+    r.chosen_index = -1, r.explained_below_min_gain = false;
   // Nothing the input tests found, and nothing worth its parameters (a disturbance alone, a
   // clip, the blind search's best): not material.
   if (!r.location.input_mismatch && !r.chosen()) {

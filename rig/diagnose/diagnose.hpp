@@ -8,7 +8,8 @@
 //    scored on the interleaved validation blocks (hypothesis_fit.hpp); pairs are tried when
 //    no single effect leaves an input-independent residual.
 // 3. Verdict: `none` (no test failed), the effect of the best-scoring hypothesis whose
-//    validation gain beats min_gain_pct, or `unexplained`.
+//    validation gain beats min_gain_pct (or, below it, one that leaves a residual independent
+//    of the input when nothing else is chosen), or `unexplained`.
 #pragma once
 
 #include <Eigen/Core>
@@ -78,6 +79,9 @@ struct DiagnoseResult {
   // The pair "chosen effect + drift" the verdict set aside for its immaterial drift
   // (drift_materiality.hpp), -1 for none.
   int drift_set_aside_index = -1;
+  // The chosen hypothesis scores under min_gain_pct but explains what the input tests found
+  // (verdict.hpp explains_below_min_gain).
+  bool explained_below_min_gain = false;
 };
 
 // Throws std::invalid_argument (one line) for mismatched lengths, non-finite samples,

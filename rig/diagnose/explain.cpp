@@ -390,7 +390,7 @@ std::string explain(const DiagnoseResult& r) {
         pair->score, h->score);
   if (!r.location.input_mismatch && r.location.clip.side == 0 && !has_input_side(*h))
     s += unseen_input_words(r);
-  if (r.location.input_mismatch && h->score < thresholds::kMinGainPct)
+  if (r.explained_below_min_gain)
     s += fmt::format(
         " It scores {:.2f}, under the {:.1f} asked, but its residual is no longer correlated "
         "with the input: the rest of the residual, which the fit's points are measured "

@@ -46,8 +46,10 @@ std::optional<OperatingPointMove> operating_point_moved(const DiagnoseResult& r)
 bool map_of_the_move(const DiagnoseResult& r);
 
 // When nothing is chosen although the input tests failed: the best input-side hypothesis
-// that scores above kExplainedBelowMinGainPct (its input-side part too) and leaves a residual
-// independent of the input (verdict.cpp), -1 for none.
+// that could be a verdict, scores above kExplainedBelowMinGainPct (its input-side part too)
+// if it is linear or evidenced and leaves a residual independent of the input (verdict.cpp);
+// -1 for none, also when that best one is not or does not. choose()'s later preferences (the
+// simpler effect, the delay over the lag, an immaterial drift set aside) are not applied.
 int explains_below_min_gain(const DiagnoseResult& r);
 
 // The verdict word of a chosen hypothesis.

@@ -135,6 +135,7 @@ class GensimCases(unittest.TestCase):
         self.assertEqual(rep["verdict"], "gain_change", f"seed {seed}: {rep['explanation']}")
         h = rep["hypotheses"][rep["chosen"]]
         self.assertLess(h["score"], 0.2, rep["explanation"])
+        self.assertIn("no longer correlated with the input", rep["explanation"])
         got = h["effects"][0]["params"]["gain_ratio"]
         self.assertLess(abs(got / truths[0]["truth"] - 1.0), PARAM_TOL, rep["explanation"])
 

@@ -351,8 +351,9 @@ TEST(Verdict, ADriftSetAsideIsSaidAndAnAlternativeWithItIsComparedWithThePair) {
 // effect scoring above zero whose residual is independent of the input is named (the
 // residual's tests run on the hypothesis's output: here the record itself, a residual of
 // white noise); one scoring below zero, a pair whose input-side half adds nothing to its
-// disturbance, a nonlinearity without the level's evidence, and anything when the input
-// tests passed are not (gensim_cases_test.py: an 8 % gain on a 600 s record).
+// disturbance, a nonlinearity without the level's evidence (nor the linear one below it),
+// and anything when the input tests passed are not (gensim_cases_test.py: an 8 % gain on a
+// 600 s record).
 TEST(Verdict, UnderTheMinimumGainALinearEffectThatExplainsTheInputTestsIsNamed) {
   DiagnoseResult r;
   r.problem.dt_s = 0.01;
@@ -385,6 +386,11 @@ TEST(Verdict, UnderTheMinimumGainALinearEffectThatExplainsTheInputTestsIsNamed) 
   EXPECT_EQ(explains_below_min_gain(r), -1);
   r.hypotheses = {hypothesis({{Effect::kDeadband, {0.1}, Place::kInput, {}}}, 0.13)};
   EXPECT_EQ(explains_below_min_gain(r), -1);
+  // Nor the linear effect below it: the record does not tell them apart.
+  r.hypotheses.push_back(hypothesis({gain}, 0.12));
+  EXPECT_EQ(explains_below_min_gain(r), -1);
+  std::swap(r.hypotheses[0], r.hypotheses[1]);
+  EXPECT_EQ(explains_below_min_gain(r), 0);
   r.hypotheses = {hypothesis({gain}, 0.13)};
   r.location.input_mismatch = false;
   EXPECT_EQ(explains_below_min_gain(r), -1);
