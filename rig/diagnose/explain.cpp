@@ -237,6 +237,22 @@ std::string negligible_disturbance(const DiagnoseResult& r) {
 }
 
 // Another explanation that fits about as well (verdict.hpp close_alternative), if any.
+double db_of_ln(double ln) { return 20.0 * ln / std::log(10.0); }
+
+// What the choice and the alternative g make of a gain peak that tells them apart.
+std::string peak_taken_words(const DiagnoseResult& r, const HypothesisFit& g,
+                             const GainPeak& peak) {
+  if (accounts_for(r, *r.chosen(), peak))
+    return fmt::format("which the {} accounts for", r.verdict);
+  const auto taken_db = [&](const HypothesisFit& h) {
+    return std::max(0.0, db_of_ln(share_taken(r, h, peak) * peak.log_ratio));
+  };
+  return fmt::format(
+      "of which the {} takes {:.1f} dB and it {:.1f} dB: the data's gain is "
+      "nearer the {}'s shape",
+      r.verdict, taken_db(*r.chosen()), taken_db(g), r.verdict);
+}
+
 std::string alternative_words(const DiagnoseResult& r) {
   if (r.alternative_index < 0) return "";
   const HypothesisFit& g = r.hypotheses[static_cast<std::size_t>(r.alternative_index)];
@@ -260,15 +276,15 @@ std::string alternative_words(const DiagnoseResult& r) {
       with_drift ? ", each with the drift beside it" : "");
   if (const auto peak = gain_peak_tells_apart(r, *r.chosen(), g))
     s = fmt::format(
-        " {} {} scores {:.2f} against {:.2f} but leaves the gain the data show at {:.2f} Hz "
-        "({:+.1f} dB against the model{}, beyond its uncertainty), which the {} accounts for.",
-        a, names, g.score, r.chosen()->score, peak->freq_hz,
-        20.0 * peak->signed_log / std::log(10.0),
+        " {} {} scores {:.2f} against {:.2f}{} but leaves the gain the data show at {:.2f} Hz "
+        "({:+.1f} dB against the model{}, beyond its uncertainty), {}.",
+        a, names, g.score, against, with_drift ? " (each with the drift beside it)" : "",
+        peak->freq_hz, db_of_ln(peak->signed_log),
         peak->from <= 0 ? std::string()
         : peak->to < 0  ? fmt::format(" from {:.0f} s", peak->from * r.problem.dt_s)
                         : fmt::format(" from {:.0f} s to {:.0f} s", peak->from * r.problem.dt_s,
                                       peak->to * r.problem.dt_s),
-        r.verdict);
+        peak_taken_words(r, g, *peak));
   if (r.location.amp.two_level_input)
     s += " On a two-level input every step is the same size, so a deadband, a play or a slew "
          "limit in the loop acts much as a gain or a lag would; a test whose bias varies in "

@@ -59,18 +59,22 @@ std::optional<GainPeak> gain_peak(const Location& loc) {
 
 // Whether h's own response at the peak (the measured one less that of the residual h
 // leaves) takes at least kGainPeakTakenShare of the disagreement's |ln| (thresholds.hpp).
-bool accounts_for(const DiagnoseResult& r, const HypothesisFit& h, const GainPeak& peak) {
-  if (h.yhat.size() != r.problem.y.size()) return false;
+double share_taken(const DiagnoseResult& r, const HypothesisFit& h, const GainPeak& peak) {
+  if (h.yhat.size() != r.problem.y.size()) return 0.0;
   const FrequencyLocation left = located_over(r.problem, h.yhat, peak);
   const auto bin =
       std::min_element(left.bins.begin(), left.bins.end(), [&](const auto& a, const auto& b) {
         return std::abs(a.freq_hz - peak.freq_hz) < std::abs(b.freq_hz - peak.freq_hz);
       });
-  if (bin == left.bins.end()) return false;
+  if (bin == left.bins.end()) return 0.0;
   const std::complex<double> own = bin->measured - bin->residual_response;
-  if (std::abs(own) <= 0.0) return false;
+  if (std::abs(own) <= 0.0) return 0.0;
   const double left_log = std::abs(std::log(std::abs(bin->measured / own)));
-  return left_log <= (1.0 - thresholds::kGainPeakTakenShare) * peak.log_ratio;
+  return 1.0 - left_log / peak.log_ratio;
+}
+
+bool accounts_for(const DiagnoseResult& r, const HypothesisFit& h, const GainPeak& peak) {
+  return share_taken(r, h, peak) >= thresholds::kGainPeakTakenShare;
 }
 
 std::optional<GainPeak> gain_peak(const DiagnoseResult& r, const HypothesisFit& h) {
@@ -97,7 +101,12 @@ std::optional<GainPeak> gain_peak_tells_apart(const DiagnoseResult& r, const Hyp
   // choice before it, which may be either).
   for (const HypothesisFit* h : {&chosen, &other}) {
     const auto peak = gain_peak(r, *h);
-    if (peak && accounts_for(r, chosen, *peak) && !accounts_for(r, other, *peak)) return peak;
+    if (!peak) continue;
+    if (accounts_for(r, chosen, *peak) && !accounts_for(r, other, *peak)) return peak;
+    if (!accounts_for(r, other, *peak) &&
+        (share_taken(r, chosen, *peak) - share_taken(r, other, *peak)) * peak->log_ratio >=
+            thresholds::kGainPeakLeadLog)
+      return peak;
   }
   return std::nullopt;
 }

@@ -29,8 +29,12 @@ std::optional<GainPeak> gain_peak(const DiagnoseResult& r, const HypothesisFit& 
 // Whether h's own response at the peak (the measured one less that of the residual h
 // leaves) takes at least kGainPeakTakenShare of the disagreement's |ln| (thresholds.hpp).
 bool accounts_for(const DiagnoseResult& r, const HypothesisFit& h, const GainPeak& peak);
+// The share of the disagreement's |ln| that h's own response at the peak takes: 1 all of it,
+// 0 none (or h leaves it larger).
+double share_taken(const DiagnoseResult& r, const HypothesisFit& h, const GainPeak& peak);
 
-// When the data show a gain peak that `chosen` accounts for and `other` does not: the peak.
+// When the data show a gain peak that `chosen` accounts for and `other` does not, or of which
+// `chosen` takes more than `other` by kGainPeakLeadLog (thresholds.hpp): the peak.
 std::optional<GainPeak> gain_peak_tells_apart(const DiagnoseResult& r, const HypothesisFit& chosen,
                                               const HypothesisFit& other);
 

@@ -93,6 +93,13 @@ inline constexpr double kDirectionBeyondLagZ = 2.5;
 inline constexpr double kGainPeakRatio = 2.0;
 inline constexpr double kGainPeakRelError = 0.25;
 inline constexpr double kGainPeakTakenShare = 0.5;
+// When none within the margin takes that share, the best one whose own response takes more
+// of the disagreement's |ln| than the choice's by at least the peak's standard error (|H1|'s
+// relative error bound above, that of ln|H1|): the data's gain is nearer its shape. Noise
+// hides the top of a mode above the band, so its fit takes a quarter to a half of the peak
+// where a delay in the loop takes none (droopsim's softened coupling, 6-7 Hz: 0.32-0.63 more
+// of the |ln| than the delay on the governor's error; docs/diagnose.md).
+inline constexpr double kGainPeakLeadLog = kGainPeakRelError;
 // An effect found to act from late in the record (onset.cpp) is looked for over its own span
 // when the whole record shows no peak, if the span holds this many samples: 16 disjoint
 // segments of welch_segment's shortest length (64), so that its own segments (128 at this

@@ -18,6 +18,7 @@ namespace {
 
 using thresholds::kDampingOverStiffness;
 using thresholds::kExplainedBelowMinGainPct;
+using thresholds::kGainPeakLeadLog;
 using thresholds::kLagOverDelayMarginPct;
 using thresholds::kNestedMarginPct;
 using thresholds::kNonlinearOverLinearPct;
@@ -216,24 +217,32 @@ int step_gain_choice(const DiagnoseResult& r, double min_gain) {
 }
 
 // A gain the data show beyond their uncertainty (thresholds.hpp) that the choice i leaves:
-// the best hypothesis within kNonlinearOverLinearPct that accounts for it, if one does (not a
-// nonlinear one in place of a linear choice).
+// the best hypothesis within kNonlinearOverLinearPct that accounts for it, if one does, or
+// else the best that takes more of it than i by kGainPeakLeadLog (not a nonlinear one in place
+// of a linear choice).
 int account_for_gain_peak(const DiagnoseResult& r, int i, double min_gain) {
   const auto& chosen = r.hypotheses[static_cast<std::size_t>(i)];
   const auto peak = gain_peak(r, chosen);
   if (!peak) return i;
   if (accounts_for(r, chosen, *peak)) return i;
-  for (std::size_t j = 0; j < r.hypotheses.size(); ++j) {  // ranked
+  const auto candidate = [&](std::size_t j) {
     const auto& g = r.hypotheses[j];
-    if (g.score < std::max(min_gain, chosen.score - kNonlinearOverLinearPct)) break;
     // A nonlinearity must still beat a linear choice by its margin (step 4): the peak is a
     // linear shape.
-    if (static_cast<int>(j) == i || g.screened_only || !has_input_side(g) ||
-        (has_nonlinearity(g) && !has_nonlinearity(chosen)) ||
-        !could_be_verdict(g, r.location, r.problem.scales) || !pair_adds(r.hypotheses, g))
-      continue;
-    if (accounts_for(r, g, *peak)) return static_cast<int>(j);
-  }
+    return static_cast<int>(j) != i && !g.screened_only && has_input_side(g) &&
+           !(has_nonlinearity(g) && !has_nonlinearity(chosen)) &&
+           could_be_verdict(g, r.location, r.problem.scales) && pair_adds(r.hypotheses, g);
+  };
+  const double floor = std::max(min_gain, chosen.score - kNonlinearOverLinearPct);
+  for (std::size_t j = 0; j < r.hypotheses.size() && r.hypotheses[j].score >= floor; ++j)
+    if (candidate(j) && accounts_for(r, r.hypotheses[j], *peak)) return static_cast<int>(j);
+  // None takes half of it: the best that takes more of it than the choice by the peak's own
+  // standard error (thresholds.hpp, kGainPeakLeadLog).
+  const double chosen_log = share_taken(r, chosen, *peak) * peak->log_ratio;
+  for (std::size_t j = 0; j < r.hypotheses.size() && r.hypotheses[j].score >= floor; ++j)
+    if (candidate(j) &&
+        share_taken(r, r.hypotheses[j], *peak) * peak->log_ratio - chosen_log >= kGainPeakLeadLog)
+      return static_cast<int>(j);
   return i;
 }
 

@@ -64,6 +64,10 @@ judged against droopsim's own truth.
   * a softened coupling from 100 s (benchmark seed 1 d052) and behind three times the noise
     (seed 4 d051), both named `dead_time` on the governor's error before: `resonance` within
     20 %, the gain peak seen over the effect's span, or at a coarser Welch resolution;
+  * a softened coupling from 100 s (seed 9 d052) and one at 6.5 Hz behind three times the
+    noise (seed 8 d051), both named `dead_time` on the governor's error before: `resonance`
+    within 20 %, neither taking half the gain peak but the moved modes more of it than the
+    delay by more than its standard error;
   * a linkage play behind three times the noise (seed 1 d036, `none` before): the direction
     test beyond a lag fails, and `backlash` within 20 %;
   * a null behind a grid event whose sign test fails over the whole record only (seed 6
@@ -294,6 +298,28 @@ class DroopsimCases(unittest.TestCase):
         truths, rep = self.run_case("resonance", "noisy", 787176)
         self.check_effect(truths, rep, ("resonance",), "freq_hz")
         self.assertIn("which the resonance accounts for", rep["explanation"])
+
+    def check_nearer_the_peak(self, rep):
+        # Neither takes half of the peak; the moved modes take more of it than the delay by
+        # more than its standard error, and the explanation says how much of it each takes.
+        self.assertNotIn("does not tell the two apart", rep["explanation"])
+        self.assertRegex(rep["explanation"],
+                         r"of which the resonance takes \d+\.\d dB and it \d+\.\d dB: the "
+                         r"data's gain is nearer the resonance's shape")
+
+    def test_a_softened_coupling_from_100_s_is_nearer_the_gain_peak_than_a_delay(self):
+        # Benchmark seed 9 d052 (named `dead_time` on the governor's error before, 0.45 points
+        # over the moved modes, which take 5 of the peak's 11 dB from 100 s; the delay none).
+        truths, rep = self.run_case("resonance", "late", 176415)
+        self.check_effect(truths, rep, ("resonance",), "freq_hz")
+        self.check_nearer_the_peak(rep)
+
+    def test_a_softened_coupling_above_the_band_behind_3x_the_noise_is_a_resonance(self):
+        # Benchmark seed 8 d051: a coupling mode at 6.5 Hz, above the excited band, behind three
+        # times the noise (named `dead_time` on the governor's error before).
+        truths, rep = self.run_case("resonance", "noisy", 229053)
+        self.check_effect(truths, rep, ("resonance",), "freq_hz")
+        self.check_nearer_the_peak(rep)
 
     def check_curvature(self, rep):
         self.assertEqual(rep["verdict"], "static_nonlinearity", rep["explanation"])
