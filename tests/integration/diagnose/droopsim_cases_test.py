@@ -64,6 +64,8 @@ judged against droopsim's own truth.
   * a softened coupling from 100 s (benchmark seed 1 d052) and behind three times the noise
     (seed 4 d051), both named `dead_time` on the governor's error before: `resonance` within
     20 %, the gain peak seen over the effect's span, or at a coarser Welch resolution;
+  * a deadband behind the declared coupling that both the level test and the direction
+    test beyond a lag show (seed 9 d033, `hysteresis` before): `deadband`, the better fit;
   * a softened coupling from 100 s (seed 9 d052) and one at 6.5 Hz behind three times the
     noise (seed 8 d051), both named `dead_time` on the governor's error before: `resonance`
     within 20 %, neither taking half the gain peak but the moved modes more of it than the
@@ -247,6 +249,19 @@ class DroopsimCases(unittest.TestCase):
         self.assertFalse(whole, "the whole record's level test shows it: not the span's case")
         self.assertGreater(rep["hypotheses"][rep["chosen"]]["active_span_s"][0], 90.0)
         self.check_effect(truths, rep, ("deadband",), "half_width")
+
+    def test_a_deadband_shown_by_both_the_level_and_the_play_tests_is_the_better_fit(self):
+        # Benchmark seed 9 d033, behind the declared coupling: the level test and the direction
+        # test beyond a lag both fire; the deadband fits 0.34 points better than the play and
+        # is the verdict (`hysteresis` before, the play's rule taking it within the margin).
+        # Its half-width is not checked: 0.104 against 0.143, the coupling's share beside it.
+        truths, rep = self.run_case("deadband", "coupled8", 761746)
+        amp = rep["location"]["amplitude"]
+        self.assertGreater(amp["level_chi2"], 13.28)
+        self.assertLessEqual(amp["direction_beyond_lag_z"], -2.5)
+        self.assertEqual(rep["verdict"], "deadband", rep["explanation"])
+        h = rep["hypotheses"][rep["chosen"]]
+        self.assertGreater(h["validation_fit_after"], h["validation_fit_before"])
 
     def test_softer_damper_windings_from_100_s_are_a_damping_change(self):
         self.check_effect(*self.run_case("load_damping", "late", 213427), ("load_damping",),
