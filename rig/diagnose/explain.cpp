@@ -236,7 +236,6 @@ std::string negligible_disturbance(const DiagnoseResult& r) {
          unseen_input_words(r);
 }
 
-// Another explanation that fits about as well (verdict.hpp close_alternative), if any.
 double db_of_ln(double ln) { return 20.0 * ln / std::log(10.0); }
 
 // What the choice and the alternative g make of a gain peak that tells them apart.
@@ -253,6 +252,7 @@ std::string peak_taken_words(const DiagnoseResult& r, const HypothesisFit& g,
       r.verdict, taken_db(*r.chosen()), taken_db(g), r.verdict);
 }
 
+// Another explanation that fits about as well (verdict.hpp close_alternative), if any.
 std::string alternative_words(const DiagnoseResult& r) {
   if (r.alternative_index < 0) return "";
   const HypothesisFit& g = r.hypotheses[static_cast<std::size_t>(r.alternative_index)];

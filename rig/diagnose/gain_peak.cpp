@@ -57,8 +57,8 @@ std::optional<GainPeak> gain_peak(const Location& loc) {
   return GainPeak{at, best, signed_log};
 }
 
-// Whether h's own response at the peak (the measured one less that of the residual h
-// leaves) takes at least kGainPeakTakenShare of the disagreement's |ln| (thresholds.hpp).
+// The share of the disagreement's |ln| that h's own response at the peak (the measured one
+// less that of the residual h leaves) takes: 1 all of it, 0 or less none.
 double share_taken(const DiagnoseResult& r, const HypothesisFit& h, const GainPeak& peak) {
   if (h.yhat.size() != r.problem.y.size()) return 0.0;
   const FrequencyLocation left = located_over(r.problem, h.yhat, peak);
