@@ -178,6 +178,10 @@ TEST(CommissionFaults, FullDiskMidTestIsARigFailureTripExit4) {
   ASSERT_TRUE(WIFEXITED(status)) << "killed: " << read_text(dir / "rig.log");
   EXPECT_EQ(WEXITSTATUS(status), 4) << read_text(dir / "rig.log");
   const auto report = read_json(out / "report.json");
+  // Every exit 4 names its cause in the report; print the log and the report when it does not.
+  ASSERT_TRUE(report["safety"]["trip"].is_object())
+      << read_text(dir / "rig.log") << "\nsafety: " << report["safety"].dump()
+      << "\nphases: " << report.value("phases", nlohmann::json()).dump();
   EXPECT_EQ(report["safety"]["trip"]["cause"], "rig_failure");
   EXPECT_EQ(report["ramp_down"]["cleared"], true);
   EXPECT_EQ(report["model_written"], false);

@@ -85,6 +85,12 @@ FAULT_AT_S = 7.1
 # write), started from the largest value the governor may hold (DESIGN.md section 8 layer 3).
 # The excitation itself moves by at most about 0.06 % per 10 ms sample at that point.
 MAX_STEP_PCT = 0.1
+# A server stall that can carry the set out of the band on its own: 0.1 s with 1 % held. A held
+# bias u drives the power towards K u (46 kW per %) with the 2 Hz mode's (zeta 0.1) 73 %
+# overshoot: up to 80 kW, three quarters of the 105 kW band, added to wherever the excitation
+# had the power (0.4 of the band at most in clean runs).
+HELD_STALL_S = 0.1
+HELD_BIAS_PCT = 1.0
 
 # Stderr must name the cause: one regular expression per kind of cause (case-insensitive).
 LINK_LOST_RE = r"connect|reset|closed|lost|broken pipe|refused|end of file|eof"
@@ -318,8 +324,20 @@ def run_case(name: str, case: Case, python: str, root: Path) -> Outcome:
     if timed_out:
         p.append(f"rig did not finish within {case.timeout_s:.0f} s (sent SIGINT)")
 
-    # (a) exit code
-    if rc not in case.expect_exit:
+    # (a) exit code. A clean run may end in a band trip only when the server itself stalled
+    # holding a large bias: the plant then ran on with the bias held, as a governor whose
+    # communication hangs would, and tripping is the rig's right answer (never the default).
+    stalls = [r for r in recs if r.get("ev") == "stall"]
+    held = [r for r in stalls if r["behind_s"] >= HELD_STALL_S and abs(r["held_pct"]) >= HELD_BIAS_PCT]
+    if stalls:
+        worst = max(stalls, key=lambda r: r["behind_s"])
+        out.facts.append(f"server stalls: {len(stalls)}, longest {worst['behind_s']} s holding "
+                         f"{worst['held_pct']} %")
+    band_trip = rc == EXIT_SAFETY and "out_of_band" in stdout + stderr
+    if case.clean and band_trip and held:
+        out.facts.append(f"band trip after the server stalled {held[0]['behind_s']} s holding "
+                         f"{held[0]['held_pct']} % at t={held[0]['t']}: accepted")
+    elif rc not in case.expect_exit:
         p.append(f"(a) exit {rc}, expected {sorted(case.expect_exit)}")
 
     writes = writes_of(recs)

@@ -93,6 +93,8 @@ HOLDING_COUNT = 3   # holding 0..2
 INPUT_COUNT = 10    # input 0..9
 
 WRITE_FCS = {6, 16, 23}
+# The plant falling this far behind wall time is logged as a `stall` (the bias was held).
+STALL_LOG_S = 0.05
 
 # name -> (strikes at: "start" | "fault_at", default value, default duration in s (None: for
 # the rest of the run; 0: one-shot action), help)
@@ -355,6 +357,12 @@ class Governor:
         The plant thread calls this at the tick rate; every read and write calls it first too,
         so an answer always reflects wall time even if the thread was not scheduled for a while
         (a loaded machine): the counter then jumps, it never lags."""
+        behind_s = t - self.next_tick_t
+        if behind_s >= STALL_LOG_S:
+            # Not scheduled for a while (a loaded machine): the plant ran on with the bias held.
+            # Logged so that a band trip it causes is not taken for the rig's own doing.
+            self.log.write({"t": self.log.t(t), "ev": "stall", "behind_s": round(behind_s, 4),
+                            "held_pct": round(self.applied_pct, 3)})
         while self.next_tick_t <= t:
             self._update_rules(self.next_tick_t)
             self.y_kw = self.plant.step(self.applied_pct)
