@@ -256,6 +256,12 @@ bool unstable_loop(std::span<const AppliedEffect> effects, const model::Transfer
 }  // namespace
 
 ModelOutput model_output(const Problem& pr, std::span<const AppliedEffect> effects) {
+  std::vector<AppliedEffect> shared;  // one governor, one feedback (governor_loop.hpp)
+  if (shared_feedback(effects)) {
+    shared.assign(effects.begin(), effects.end());
+    share_feedback(shared);
+    effects = shared;
+  }
   ModelOutput out;
   const DataScales& s = pr.scales;
   bool input_side = false, feedback = false;

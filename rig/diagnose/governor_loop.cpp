@@ -42,6 +42,25 @@ LoopFeedback loop_feedback(std::span<const double> p) {
   return {p[n - 3], p[n - 2], p[n - 1]};
 }
 
+std::optional<SharedFeedback> shared_feedback(std::span<const AppliedEffect> effects) {
+  SharedFeedback s;
+  bool loop = false, error = false;
+  for (std::size_t i = 0; i < effects.size(); ++i) {
+    if (effects[i].place == Place::kGovernorLoop) s.loop = i, loop = true;
+    if (in_error_loop(effects[i].place) && feedback_fitted(effects[i].place))
+      s.error = i, error = true;
+  }
+  if (!loop || !error) return std::nullopt;
+  return s;
+}
+
+void share_feedback(std::vector<AppliedEffect>& effects) {
+  const auto s = shared_feedback(effects);
+  if (!s) return;
+  const std::vector<double>& from = effects[s->error].place_params;
+  effects[s->loop].place_params.assign(from.end() - 3, from.end());
+}
+
 bool governor_loop_possible(const model::TransferFunction& tf) {
   const double g0 = tf.dc_gain();
   return std::isfinite(g0) && std::abs(g0) > 1e-12;

@@ -18,7 +18,9 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <optional>
 #include <span>
+#include <vector>
 
 #include "rig/diagnose/effects.hpp"
 #include "rig/model/transfer_function.hpp"
@@ -55,6 +57,17 @@ Eigen::VectorXd feed_back(const LoopFeedback& h, const Eigen::VectorXd& y, doubl
 // parameters: governor_loop, governor_error, governor_pi).
 bool feedback_fitted(Place place);
 LoopFeedback loop_feedback(std::span<const double> place_params);
+
+// One governor, one feedback: in a hypothesis with a linear effect inside the governor's loop
+// and an effect on its error at a place that fits the loop's feedback (governor_error,
+// governor_pi), the loop is closed with that place's feedback; the linear effect's own three
+// are not searched (hypothesis_fit.cpp) and not counted. The two effects' indices, or none.
+struct SharedFeedback {
+  std::size_t loop = 0, error = 0;
+};
+std::optional<SharedFeedback> shared_feedback(std::span<const AppliedEffect> effects);
+// Sets the loop effect's feedback (its place parameters) to the error place's, when shared.
+void share_feedback(std::vector<AppliedEffect>& effects);
 
 // Whether tf can be closed that way: a finite, non-zero static gain.
 bool governor_loop_possible(const model::TransferFunction& tf);

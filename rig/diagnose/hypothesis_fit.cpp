@@ -7,6 +7,7 @@
 #include <unsupported/Eigen/NumericalDiff>
 
 #include "rig/diagnose/effect_registry.hpp"
+#include "rig/diagnose/governor_loop.hpp"
 
 namespace rig::diagnose {
 namespace {
@@ -43,6 +44,7 @@ std::vector<AppliedEffect> unpack(const Layout& l, const Eigen::VectorXd& x) {
     for (const auto& s : l.place_specs[i]) e.place_params.push_back(to_physical(s, x(k++)));
     out.push_back(std::move(e));
   }
+  share_feedback(out);  // the loop effect's feedback, not searched (governor_loop.hpp)
   return out;
 }
 
@@ -99,6 +101,8 @@ int HypothesisFit::parameter_count() const {
     n += static_cast<int>(acting_params(e) + e.place_params.size());
     n += effect_model(e.effect).regressor_columns;  // e.g. amplitude and phase by LS
   }
+  if (const auto s = shared_feedback(effects))
+    n -= static_cast<int>(effects[s->loop].place_params.size());
   return n;
 }
 
@@ -106,10 +110,13 @@ HypothesisFit fit_hypothesis(const Problem& pr,
                              const std::vector<std::vector<AppliedEffect>>& starts,
                              const Eigen::VectorXd& baseline_yhat, const FitOptions& options) {
   Layout layout;
-  for (const auto& e : starts.front()) {
+  const auto shared = shared_feedback(starts.front());
+  for (std::size_t i = 0; i < starts.front().size(); ++i) {
+    const AppliedEffect& e = starts.front()[i];
     layout.shapes.push_back(e);
     layout.specs.push_back(parameter_specs(e.effect, pr.scales));
-    layout.place_specs.push_back(place_specs(e.place, pr.scales));
+    layout.place_specs.push_back(shared && shared->loop == i ? std::vector<ParamSpec>{}
+                                                             : place_specs(e.place, pr.scales));
     layout.size += static_cast<int>(layout.specs.back().size() + layout.place_specs.back().size());
   }
   int calls = 0;
@@ -124,7 +131,7 @@ HypothesisFit fit_hypothesis(const Problem& pr,
     for (std::size_t i = 0; i < start.size(); ++i) {
       for (std::size_t j = 0; j < start[i].params.size(); ++j)
         x(k++) = to_internal(layout.specs[i][j], start[i].params[j]);
-      for (std::size_t j = 0; j < start[i].place_params.size(); ++j)
+      for (std::size_t j = 0; j < layout.place_specs[i].size(); ++j)
         x(k++) = to_internal(layout.place_specs[i][j], start[i].place_params[j]);
     }
     fn(x, f);

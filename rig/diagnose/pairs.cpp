@@ -43,18 +43,26 @@ bool pairable(const AppliedEffect& a, const AppliedEffect& b) {
   const auto error_loop = [](const AppliedEffect& e) {  // (the governor loop's changes G)
     return in_error_loop(e.place) || e.place == Place::kGovernorLoop;
   };
-  if (error_loop(a) && error_loop(b)) return false;
+  // ... but a linear effect inside the governor's loop beside an effect on its error that
+  // fits the loop's feedback: both then close the loop with that feedback (governor_loop.hpp).
+  if (error_loop(a) && error_loop(b)) return shared_feedback(std::vector{a, b}).has_value();
   return !((error_loop(a) && loop(b)) || (error_loop(b) && loop(a)));
 }
 
 namespace {
 
-// The best fitted place of effect e that can sit beside b (singles are ranked); nullptr when
-// none can.
+// Whether a and b close the governor's loop with one feedback (governor_loop.hpp).
+bool share(const AppliedEffect& a, const AppliedEffect& b) {
+  return shared_feedback(std::vector{a, b}).has_value();
+}
+
+// The best fitted place of effect e that can sit beside b (singles are ranked), with its own
+// feedback when `apart`; nullptr when none can.
 const AppliedEffect* best_place_beside(const std::vector<HypothesisFit>& singles, Effect e,
-                                       const AppliedEffect& b) {
+                                       const AppliedEffect& b, bool apart = false) {
   for (const auto& h : singles)
-    if (h.effects.size() == 1 && h.effects[0].effect == e && pairable(h.effects[0], b))
+    if (h.effects.size() == 1 && h.effects[0].effect == e && pairable(h.effects[0], b) &&
+        !(apart && share(h.effects[0], b)))
       return &h.effects[0];
   return nullptr;
 }
@@ -79,6 +87,17 @@ Candidate pair_starts(const AppliedEffect& a, const AppliedEffect& b, const Prob
   };
   add(b);
   for (auto& start : placed_starts(b.effect, b.place, pr, left)) add(start.front());
+  // Two effects closing the governor's loop with one feedback start from each one's fitted
+  // feedback: from the lag's, the pair is the lag's single with the nonlinearity added.
+  if (const auto s = shared_feedback(c.front())) {
+    for (std::size_t i = 0, n = c.size(); i < n; ++i) {
+      std::vector<AppliedEffect> v = c[i];
+      std::vector<double>& to = v[s->error].place_params;
+      const std::vector<double>& from = v[s->loop].place_params;
+      std::copy(from.end() - 3, from.end(), to.end() - 3);
+      c.push_back(std::move(v));
+    }
+  }
   return c;
 }
 
@@ -153,8 +172,9 @@ std::vector<Candidate> forward_pairs(const Problem& pr, const std::vector<Hypoth
       // governor's loop and a play after its PI share the loop: the lag at the input then).
       if (std::find(best_seen.begin(), best_seen.end(), b.effect) == best_seen.end()) {
         best_seen.push_back(b.effect);
-        if (!pairable(a, b))
-          if (const AppliedEffect* a2 = best_place_beside(singles, a.effect, b))
+        // (and, where they would share the governor's feedback, apart as well)
+        if (!pairable(a, b) || share(a, b))
+          if (const AppliedEffect* a2 = best_place_beside(singles, a.effect, b, true))
             if (!fitted(existing, *a2, b) && !fitted(out, *a2, b))
               out.push_back(pair_starts(*a2, b, pr, after_a));
       }
@@ -216,6 +236,32 @@ std::vector<Candidate> places_with_dominant(const Problem& pr,
     if (h.effects.size() != 1 || !several_places(h.effects[0].effect)) continue;
     if (!fitted(existing, h.effects[0], dist->effects[0]))
       out.push_back(pair_starts(dist->effects[0], h.effects[0], pr, left, true));
+  }
+  return out;
+}
+
+// The governor's loop often holds two effects (a speed-error deadband and a slow combustion:
+// droopsim d078): the best linear single inside the loop beside each nonlinearity at its best
+// place on the loop's error that fits the feedback (governor_error, governor_pi), the two
+// closing the loop with one feedback. Started from both singles' fits and from the linear
+// effect's own seeds on what the nonlinearity leaves.
+std::vector<Candidate> loop_pairs(const Problem& pr, const std::vector<HypothesisFit>& singles,
+                                  const std::vector<Candidate>& existing) {
+  const auto lag = std::find_if(singles.begin(), singles.end(), [](const HypothesisFit& h) {
+    return h.effects.size() == 1 && h.effects[0].place == Place::kGovernorLoop;
+  });
+  std::vector<Candidate> out;
+  if (lag == singles.end()) return out;
+  const AppliedEffect& b = lag->effects[0];
+  std::vector<Effect> seen;
+  for (const auto& h : singles) {  // ranked: each nonlinearity's best place beside the lag
+    if (h.effects.size() != 1) continue;
+    const AppliedEffect& a = h.effects[0];
+    if (kind_of(a.effect) != EffectKind::kInputNonlinearity || !pairable(a, b) ||
+        std::find(seen.begin(), seen.end(), a.effect) != seen.end())
+      continue;
+    seen.push_back(a.effect);
+    if (!fitted(existing, a, b)) out.push_back(pair_starts(a, b, pr, locate(pr, h.yhat)));
   }
   return out;
 }

@@ -49,4 +49,9 @@ std::vector<Candidate> places_with_dominant(const Problem& problem,
                                             const std::vector<HypothesisFit>& singles,
                                             const std::vector<Candidate>& existing);
 
+// The best linear single inside the governor's loop beside each nonlinearity at its best place
+// on the loop's error (not among `existing`).
+std::vector<Candidate> loop_pairs(const Problem& problem, const std::vector<HypothesisFit>& singles,
+                                  const std::vector<Candidate>& existing);
+
 }  // namespace rig::diagnose

@@ -18,6 +18,7 @@ using thresholds::kDominantDisturbanceGainPct;
 using thresholds::kRefinedBehindDisturbance;
 using thresholds::kRefinedDominantPlaces;
 using thresholds::kRefinedForwardPairs;
+using thresholds::kRefinedLoopPairs;
 
 // One effect's hypotheses: an input-side nonlinearity at each place it can sit
 // (placement.hpp), a linear effect with a form on the error or in the governor's loop at the
@@ -258,6 +259,10 @@ std::vector<HypothesisFit> search_hypotheses(const Problem& pr, const Location& 
            pr, {tried.begin() + static_cast<std::ptrdiff_t>(paired.size()), tried.end()}, base, o,
            kRefinedForwardPairs))
     pairs.push_back(std::move(h));
+  const std::vector<Candidate> in_loop = loop_pairs(pr, hs, tried);
+  for (auto& h : screen_and_refine(pr, in_loop, base, o, kRefinedLoopPairs))
+    pairs.push_back(std::move(h));
+  tried.insert(tried.end(), in_loop.begin(), in_loop.end());
   for (auto& h :
        screen_and_refine(pr, places_with_dominant(pr, hs, tried), base, o, kRefinedDominantPlaces))
     pairs.push_back(std::move(h));

@@ -212,6 +212,9 @@ inline constexpr std::size_t kPairedInputSingles = 3;
 inline constexpr std::size_t kRefinedForwardPairs = 3;
 // Of the best input-side singles, this many are also paired with each detected disturbance.
 inline constexpr std::size_t kPairedWithDisturbance = 2;
+// The pairs inside the governor's loop (a nonlinearity on its error beside its best lag) are
+// screened and this many refined.
+inline constexpr std::size_t kRefinedLoopPairs = 2;
 // A disturbance whose single scores this much dominates the residual: the input-side
 // singles, fitted without it, are ranked by noise then, so every input-side effect is paired
 // with it (the drift materiality gain below: the same "clearly more than noise").

@@ -78,6 +78,9 @@ judged against droopsim's own truth.
     (seed 9 d084, `static_nonlinearity` before): `none`, the operating point moved.
   * a speed-error deadband from 100 s (seed 7 d032, `load_damping` before): `deadband`, the
     level test on its span waiving the nonlinear margin that the whole record's did not.
+  * a speed-error deadband beside a slow combustion (seed 9 d078, `resonance` with a gain
+    change before): `deadband` on the governor's error and `extra_lag` inside its loop,
+    closing the loop with one feedback, both within 20 %.
 """
 import json
 import os
@@ -395,6 +398,25 @@ class DroopsimCases(unittest.TestCase):
             param = "time_constant_s" if e is lag else "half_width"
             print(f"  {e['effect']} {param} {e['params'][param]:.4f} against {t['truth']:.4f} "
                   f"at {e['place']}", flush=True)
+            self.assertLess(abs(e["params"][param] - t["truth"]), PARAM_TOL * t["truth"],
+                            rep["explanation"])
+        self.assertGreater(h["validation_fit_after"], h["validation_fit_before"])
+
+    def test_a_speed_error_deadband_beside_a_slow_combustion_are_both_in_the_governors_loop(self):
+        # Benchmark seed 9 d078: the deadband on the speed error and the combustion lag both
+        # sit inside the governor's loop, a pair that could not be formed while one loop held
+        # one effect (named `resonance` with a gain change before). They now close the loop
+        # with one feedback, the deadband's.
+        truths, rep = self.run_case("deadband+extra_lag", "pair", 813106)
+        h = rep["hypotheses"][rep["chosen"]]
+        got = {e["effect"]: e for e in h["effects"]}
+        self.assertEqual(sorted(got), ["deadband", "extra_lag"], rep["explanation"])
+        self.assertEqual(got["deadband"]["place"], "governor_error", rep["explanation"])
+        self.assertEqual(got["extra_lag"]["place"], "governor_loop", rep["explanation"])
+        for e, t, param in ((got["deadband"], truths[0], "half_width"),
+                            (got["extra_lag"], truths[1], "time_constant_s")):
+            print(f"  {e['effect']} {param} {e['params'][param]:.4f} against {t['truth']:.4f}",
+                  flush=True)
             self.assertLess(abs(e["params"][param] - t["truth"]), PARAM_TOL * t["truth"],
                             rep["explanation"])
         self.assertGreater(h["validation_fit_after"], h["validation_fit_before"])

@@ -60,5 +60,40 @@ TEST(Screen, AFitThatThrowsOnAWorkerIsRethrownNotFatal) {
                std::invalid_argument);
 }
 
+// One governor, one feedback (governor_loop.hpp shared_feedback): a lag inside the governor's
+// loop pairs with an effect on its error only at a place that fits the loop's feedback, and
+// the two then close the loop with that feedback: the lag's own is neither used nor counted.
+TEST(Pairs, ALagInTheGovernorsLoopSharesTheFeedbackOfAnEffectOnItsError) {
+  const AppliedEffect lag{Effect::kExtraLag, {0.05}, Place::kGovernorLoop, {-1.0, 0.0, 0.005}};
+  const AppliedEffect band{Effect::kDeadband, {0.2}, Place::kGovernorError, {0.5, 0.0, 0.005}};
+  const AppliedEffect band_unity{Effect::kDeadband, {0.2}, Place::kError, {}};
+  ASSERT_TRUE(pairable(lag, band));
+  ASSERT_TRUE(pairable(band, lag));
+  ASSERT_FALSE(pairable(lag, band_unity));  // no feedback fitted there to share
+  ASSERT_FALSE(pairable(lag, lag));
+
+  int blocks = 0;
+  Eigen::Index warm = 0;
+  const Problem pr = prepare_problem(test::null_record(5), &blocks, &warm);
+  AppliedEffect lag_as_shared = lag;
+  lag_as_shared.place_params = {0.5, 0.0, 0.005};
+  const Eigen::VectorXd pair = model_output(pr, std::vector{band, lag}).yhat;
+  const Eigen::VectorXd shared = model_output(pr, std::vector{band, lag_as_shared}).yhat;
+  ASSERT_EQ(pair.size(), shared.size());
+  EXPECT_LT((pair - shared).cwiseAbs().maxCoeff(), 1e-12 * (1.0 + shared.cwiseAbs().maxCoeff()));
+  // The lag's feedback does change the lag alone: the pair did not just ignore the lag.
+  const Eigen::VectorXd own = model_output(pr, std::vector{lag}).yhat;
+  const Eigen::VectorXd as_shared = model_output(pr, std::vector{lag_as_shared}).yhat;
+  EXPECT_GT((own - as_shared).cwiseAbs().maxCoeff(), 1e-6 * as_shared.cwiseAbs().maxCoeff());
+
+  HypothesisFit h;
+  h.effects = {band, lag};
+  HypothesisFit single;
+  single.effects = {band};
+  HypothesisFit lag_alone;
+  lag_alone.effects = {lag};
+  EXPECT_EQ(h.parameter_count(), single.parameter_count() + lag_alone.parameter_count() - 3);
+}
+
 }  // namespace
 }  // namespace rig::diagnose
