@@ -109,7 +109,10 @@ std::string what_effect_means(const AppliedEffect& e, const HypothesisFit& h, co
         "{:.0f} ms), inside the loop that works against it (the actuator or the rack; the "
         "values are the bias-% equivalents there)",
         e.place_params.at(0), 1e3 * e.place_params.at(1));
-  if (feedback_fitted(e.place)) {
+  const auto shared = shared_feedback(h.effects);
+  if (shared && e.place == Place::kGovernorLoop) {
+    s += "; the governor sees the output through the same feedback";
+  } else if (feedback_fitted(e.place)) {
     const LoopFeedback fb = loop_feedback(e.place_params);
     s += fmt::format(
         "; the governor sees, fitted, {:.2f} of the output and its rate times {:.0f} ms, "
