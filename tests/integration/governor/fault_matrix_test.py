@@ -398,9 +398,17 @@ def run_case(name: str, case: Case, python: str, root: Path) -> Outcome:
                      f"{fmt_write(mw)}")
 
     # (f) no step at the governor after the fault: the rig ramps from what the governor holds.
+    # Judged from the first input read the server answered with the fault on: a write the rig
+    # sent before that (its tick's excitation write, in flight when the fault struck) cannot
+    # be a reaction to a fault it had no way to see.
+    fault_read = next((r["t"] for r in recs if r.get("ev") == "fault_read"), fault_on)
     if case.ramp_check and fault_on is not None:
+        early = [w for w in accepted if fault_on <= w["t"] and w["t_rx"] < fault_read]
+        if early:
+            out.facts.append(f"{len(early)} write(s) sent before the rig could read the fault "
+                             f"(first fault read at t={fault_read})")
         steps = [(abs(w["applied_after_pct"] - w["applied_before_pct"]), w) for w in accepted
-                 if w["t"] >= fault_on and "applied_after_pct" in w]
+                 if w["t_rx"] >= fault_read and "applied_after_pct" in w]
         if steps:
             mx, mw = max(steps, key=lambda x: x[0])
             out.facts.append(f"largest applied-bias step by a write after the fault {mx:.3f} %")
@@ -417,7 +425,7 @@ def run_case(name: str, case: Case, python: str, root: Path) -> Outcome:
         for w in writes:
             if w["result"] == "deferred" or "bias_pct" not in w:
                 continue
-            if (w["t"] >= fault_on and abs(w["bias_pct"]) > abs(held) + MAX_STEP_PCT + 1e-9
+            if (w["t_rx"] >= fault_read and abs(w["bias_pct"]) > abs(held) + MAX_STEP_PCT + 1e-9
                     and raised is None):
                 raised = (held, w)
             if w["result"] == "ok":

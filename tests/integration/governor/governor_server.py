@@ -241,6 +241,7 @@ class Governor:
         self.reads = 0
         self.writes = 0
         self.fault_was_active = False
+        self.fault_read_logged = False  # the first input read served with the fault on
         self.last_write_applied = (0.0, 0.0)
         self.ticks = 0
         self.next_tick_t = self.plant_t0 + self.dt
@@ -412,8 +413,15 @@ class Governor:
     # ---- register access (from the asyncio thread) ------------------------------------------
     def read_inputs(self, address: int, count: int) -> list[int]:
         with self.lock:
-            self.advance_to(now())
+            t = now()
+            self.advance_to(t)
             self.reads += 1
+            if self.fault_was_active and not self.fault_read_logged:
+                # The first read that can tell the rig about the fault: a write it sends
+                # before this one cannot be a reaction to it (fault_matrix_test (f)).
+                self.fault_read_logged = True
+                self.log.write({"t": self.log.t(t), "ev": "fault_read", "addr": address,
+                                "count": count})
             return list(self.inputs[address:address + count])
 
     def read_holding(self, address: int, count: int) -> list[int]:
