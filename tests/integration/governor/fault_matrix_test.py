@@ -83,7 +83,8 @@ FAULT_AT_S = 7.1
 # (f) After an "at" fault has struck, no accepted write may move the bias the governor applies
 # by more than this (% of rated): the way back to baseline is a ramp (2 %/s, 0.02-0.04 % per
 # write), started from the largest value the governor may hold (DESIGN.md section 8 layer 3).
-# The excitation itself moves by at most about 0.06 % per 10 ms sample at that point.
+# Judged from the server's first input read with the fault on: the write in flight before it is
+# the tick's excitation sample (one moved 0.107 % in a CI run), not a reaction to the fault.
 MAX_STEP_PCT = 0.1
 # A server stall that can carry the set out of the band on its own: 0.1 s with 1 % held. A held
 # bias u drives the power towards K u (46 kW per %) with the 2 Hz mode's (zeta 0.1) 73 %
