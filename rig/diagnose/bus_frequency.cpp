@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <complex>
+#include <numbers>
 #include <stdexcept>
 
 #include "rig/diagnose/augmented_model.hpp"
@@ -98,6 +99,51 @@ Eigen::VectorXd grid_coefficients(const Problem& pr, const Eigen::VectorXd& resi
   return regress(signal::ac_couple(residual, pr.dt_s, hp), x, used).coef.head(phi.cols());
 }
 
+// x through the band where the grid's answer through the governor is (thresholds.hpp
+// kReferredBandS): above a drift's time scale, below the governor's and the swing's dynamics.
+Eigen::VectorXd referral_band(const Eigen::VectorXd& x, double dt_s) {
+  const auto [high_pass_s, low_pass_s] = thresholds::kReferredBandS;
+  return lag(lag(signal::ac_couple(x, dt_s, high_pass_s), dt_s, low_pass_s), dt_s, low_pass_s);
+}
+
+// The grid's frequency enters a speed governor where the bias does, on its speed error: a set
+// in droop R at f0 answers df as a bias of a df, a = -100 / (R f0) % per Hz. In the band where
+// that path is the model's own response (referral_band), the residual is a G f: a from a
+// regression on G f alone, its standard error from the band's degrees of freedom. Referred to
+// the input (u + a f), an effect inside the governor's loop sees what its actuator saw (a rack
+// stop hit by the grid's wander, not by the bias alone); y gains a G f, so that the baseline's
+// residual is unchanged. Only where a is a droop a set can have, is measured well, and moves
+// the governor's input by a share of what the bias does (thresholds.hpp).
+void refer_to_input(DiagnoseInput& in, const Problem& pr, const Eigen::VectorXd& f, double f0,
+                    const Eigen::VectorXd& residual, const Eigen::ArrayXd& used,
+                    BusFrequencyShare& s) {
+  Problem pf = pr;
+  pf.u = f;
+  finish_problem(pf);
+  Eigen::VectorXd gf = pf.baseline_z;
+  if (pr.output_rc_s) gf = signal::ac_couple(gf, pr.dt_s, *pr.output_rc_s);
+  const Eigen::ArrayXd rb = referral_band(residual, pr.dt_s).array() * used;
+  const Eigen::ArrayXd gb = referral_band(gf, pr.dt_s).array() * used;
+  const double sgg = gb.square().sum();
+  if (!(sgg > 0.0)) return;
+  const double a = (rb * gb).sum() / sgg;
+  const double m = used.sum();
+  const double band_hz = 1.0 / (2.0 * std::numbers::pi * thresholds::kReferredBandS.second);
+  const double dof = std::max(1.0, 2.0 * band_hz * m * pr.dt_s);
+  const double se = std::sqrt((rb - a * gb).square().sum() / m / (sgg / m) / dof);
+  s.input_per_hz = a;
+  s.input_per_hz_se = se;
+  if (f0 > 0.0) s.droop_pct = -100.0 / (a * f0) * 100.0;
+  const double share = std::abs(a) * s.frequency_rms_hz / pr.scales.u_std;
+  const auto [droop_lo, droop_hi] = thresholds::kReferredDroopPct;
+  if (!(a < 0.0) || !(s.droop_pct >= droop_lo && s.droop_pct <= droop_hi) ||
+      std::abs(a) < thresholds::kReferredMinZ * se || share < thresholds::kReferredMinShare)
+    return;
+  s.referred = true;
+  in.u += a * f;
+  in.y += a * gf;
+}
+
 void check(const DiagnoseInput& in, const Eigen::VectorXd& f) {
   if (f.size() != in.y.size())
     throw std::invalid_argument(
@@ -155,10 +201,20 @@ BusFrequencyShare take_out_bus_frequency(DiagnoseInput& in, const Eigen::VectorX
   }
   const Eigen::VectorXd sc = share.array() - share.mean();
   s.share_rms = std::sqrt(sc.squaredNorm() / static_cast<double>(sc.size()));
+  // Not across a grid event: it moves the operating point by more than the small signal the
+  // model holds for (the event is the level's step, taken out as such).
+  if (s.event_at <= 0)
+    refer_to_input(in, pr, f, freq_hz.mean(), residual, used, s);
   s.note = fmt::format(
       "the grid's share through the bus frequency ({:.3g} Hz rms; {:.3g} output units rms, "
       "{:.0f} % of the model's residual) is taken out first",
       s.frequency_rms_hz, s.share_rms, 100.0 * s.residual_share);
+  if (s.referred)
+    s.note += fmt::format(
+        "; it reaches the governor's input as {:.3g} input units per Hz (a {:.2g} % droop when "
+        "the input is % of rated power), so effects inside the loop are fitted on the bias and "
+        "the grid together",
+        s.input_per_hz, s.droop_pct);
   return s;
 }
 

@@ -26,6 +26,13 @@ struct BusFrequencyShare {
   double frequency_rms_hz = 0.0;  // the frequency's wander about its mean
   double share_rms = 0.0;         // the output's share taken out, output units
   double residual_share = 0.0;    // its share of the baseline residual's variance (0-1)
+  // The frequency referred to the governor's input (refer_to_input, bus_frequency.cpp): a
+  // in input units per Hz, its standard error, the droop it means (%), and whether u + a f
+  // was taken as the input (y then carries a G f).
+  double input_per_hz = 0.0;
+  double input_per_hz_se = 0.0;
+  double droop_pct = 0.0;
+  bool referred = false;
   // A grid event: where the share steps (find_level_shift, split.hpp), -1 without one, and
   // the step (the share's mean after it less its mean before, output units): the set's
   // operating point moved there.

@@ -180,7 +180,9 @@ std::vector<Candidate> forward_pairs(const Problem& pr, const std::vector<Hypoth
       }
       if (std::find(seen.begin(), seen.end(), b.effect) != seen.end()) continue;
       if (!pairable(a, b)) continue;  // its next place may pair (a dead time in the error loop)
-      seen.push_back(b.effect);
+      // A pair sharing the governor's feedback is a different model from b at its next place
+      // beside a (F-16 Level 7: the map after the PI, a dead time at the input): form both.
+      if (!share(a, b)) seen.push_back(b.effect);
       if (fitted(existing, a, b) || fitted(out, a, b)) continue;
       out.push_back(pair_starts(a, b, pr, after_a));
     }

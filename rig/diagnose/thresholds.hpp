@@ -4,6 +4,7 @@
 
 #include <Eigen/Core>
 #include <cstddef>
+#include <utility>
 
 namespace rig::diagnose::thresholds {
 
@@ -398,5 +399,20 @@ inline constexpr double kBusFrequencyLagsS[] = {0.2, 0.6, 2.0};
 // transducer's drift (tens of seconds) has little of its power and a grid's wander (seconds)
 // most of its own: slow regressors fitted to the whole band take a drift by chance.
 inline constexpr double kBusFrequencyHighPassS = 20.0;
+
+// The frequency referred to the governor's input (bus_frequency.cpp refer_to_input): fitted
+// in the band between a 20 s high-pass (a transducer's drift, as above) and two 0.53 s lags
+// (0.3 Hz: below the governor's and the swing's own dynamics, where the grid's answer is the
+// model's response to a droop's bias; on droopsim a = -49 to -50 % per Hz against the true
+// -50 behind the grid's wander or an event, -30 to -40 where the wander is 4 mHz).
+inline constexpr std::pair<double, double> kReferredBandS{20.0, 0.53};
+// ... used only when a is a speed droop a set can have (2-10 %: diesel sets run 3-5 %; a
+// larger a is the effect's own residual taken for the grid's) ...
+inline constexpr std::pair<double, double> kReferredDroopPct{2.0, 10.0};
+// ... measured to a tenth (z 10) ...
+inline constexpr double kReferredMinZ = 10.0;
+// ... and moving the governor's input by at least this share of the bias's rms: less, and
+// an effect inside the loop sees nearly the bias alone either way.
+inline constexpr double kReferredMinShare = 0.3;
 
 }  // namespace rig::diagnose::thresholds

@@ -10,6 +10,8 @@
 
 #include "records.hpp"
 #include "rig/diagnose/diagnose.hpp"
+#include "rig/diagnose/verdict.hpp"
+#include "rig/model/transfer_function.hpp"
 
 namespace rig::diagnose {
 namespace {
@@ -75,6 +77,62 @@ TEST(BusFrequency, TheGridsWanderThroughTheDroopIsTakenOut) {
   const Eigen::VectorXd residual = r.problem.y - r.baseline_yhat;
   const double expected = std::pow(test::rms(g.share) / test::rms(residual), 2);
   EXPECT_NEAR(with.bus_frequency->residual_share, expected, 0.1);
+}
+
+// A set in a 4 % droop at 50 Hz answers the grid's frequency as a bias of -50 % per Hz, on the
+// governor's speed error (moving it by 0.6 of what the bias does), through the model; with
+// `stop`, a one-sided rack stop behind it at 1.2 rms is hit by the bias and the wander together.
+struct DroopRecord {
+  DiagnoseInput input;
+  double stop = 0.0;      // the rack stop, bias units about the operating point
+  double rack_rms = 0.0;  // the governor's input's rms (bias and wander)
+};
+
+DroopRecord droop_record(bool stop) {
+  DroopRecord d{test::null_record(kSeed)};
+  DiagnoseInput& in = d.input;
+  const Eigen::Index n = in.y.size();
+  const Eigen::VectorXd u = in.u.array() - in.u.mean();
+  const Eigen::VectorXd noise = in.y - model::simulate(in.model, u, in.dt_s);
+  constexpr double kPerHz = -50.0;  // -100 / (0.04 x 50 Hz)
+  Eigen::VectorXd df = grid_wander_hz(n, in.dt_s, kSeed + 1);
+  df *= 0.6 * test::rms(u) / (std::abs(kPerHz) * test::rms(df));
+  Eigen::VectorXd rack = u + kPerHz * df;
+  d.rack_rms = test::rms(rack);
+  d.stop = 1.2 * d.rack_rms;
+  if (stop) rack = rack.array().min(d.stop);
+  in.y = model::simulate(in.model, rack, in.dt_s) + noise;
+  const Eigen::VectorXd f = (50.0 + df.array()).matrix() + test::white(n, 0.0005, kSeed + 2);
+  in.bus_freq_hz = (f.array() / 0.001).round() * 0.001;
+  return d;
+}
+
+TEST(BusFrequency, TheGridsWanderReachesTheGovernorAsABiasThroughItsDroop) {
+  SCOPED_TRACE(::testing::Message() << "seed " << kSeed);
+  const DiagnoseResult r = diagnose(droop_record(false).input);
+  ASSERT_TRUE(r.bus_frequency.has_value());
+  const BusFrequencyShare& b = *r.bus_frequency;
+  EXPECT_TRUE(b.referred) << b.note << " a " << b.input_per_hz << " +- " << b.input_per_hz_se;
+  EXPECT_NEAR(b.droop_pct, 4.0, 0.2) << b.note;  // 5 %: the frequency's noise and steps
+  EXPECT_NE(b.note.find("droop"), std::string::npos) << b.note;
+  EXPECT_EQ(r.verdict, "none") << r.explanation;
+}
+
+TEST(BusFrequency, ARackStopHitByTheBiasAndTheGridsWanderIsASaturation) {
+  SCOPED_TRACE(::testing::Message() << "seed " << kSeed);
+  const DroopRecord d = droop_record(true);
+  const DiagnoseResult r = diagnose(d.input);
+  ASSERT_TRUE(r.bus_frequency.has_value());
+  EXPECT_TRUE(r.bus_frequency->referred) << r.bus_frequency->note;
+  EXPECT_EQ(r.verdict, "saturation") << r.explanation;
+  ASSERT_NE(r.chosen(), nullptr);
+  const AppliedEffect& e = r.chosen()->effects.at(0);  // a limit: its upper, its lower's size
+  ASSERT_EQ(verdict_of(*r.chosen()), "saturation");
+  ASSERT_GE(e.params.size(), 2u);
+  EXPECT_NEAR(e.params[0], d.stop, 0.1 * d.stop) << r.explanation;
+  // One-sided, as the stop is: the other limit beyond 3 rms of the governor's input (on the
+  // bias alone, the wander's share of the stop is fitted as a second limit at 2.3).
+  EXPECT_GT(e.params[1], 3.0 * d.rack_rms) << r.explanation;
 }
 
 TEST(BusFrequency, AnIslandedSetsFrequencyIsLeftAlone) {
