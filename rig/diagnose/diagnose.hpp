@@ -53,6 +53,11 @@ struct OperatingPointMove {
   double cross_ratio = 0.0;        // that side's, of the 99 % bound
   double cross_threshold = 0.0;
   std::array<double, 2> sign_z{};  // the sign test before and after it (AmplitudeLocation)
+  // The band test (FrequencyLocation::band_hz), when it failed over the record: whether it
+  // fails before and after the event alone (on one side at most).
+  bool band = false;
+  std::array<bool, 2> band_sides{};
+  bool correlated = true;  // the cross-correlation failed over the record (or on a half)
 };
 
 struct DiagnoseResult {

@@ -312,7 +312,9 @@ std::string operating_point_words(const DiagnoseResult& r) {
   std::string s = fmt::format(
       "The grid's event at {:.1f} s moved the set's operating point by {:.3g} output units. ",
       m.event_s, m.step);
-  if (m.one_side_dependent)
+  if (!m.correlated)
+    s += "The residual is not correlated with the input";
+  else if (m.one_side_dependent)
     s += fmt::format(
         "The model explains the recording on one side of it; {} it the residual is correlated "
         "with the input (peak {:.2f} times the 99 % bound, threshold {:.2f} for either side)",
@@ -323,6 +325,15 @@ std::string operating_point_words(const DiagnoseResult& r) {
         "99 % bound, threshold {:.2f}) but on neither side of the event alone (at most {:.2f}, "
         "threshold {:.2f}): each side is a linear answer of its own",
         t.cross_ratio, t.cross_threshold, m.cross_ratio, m.cross_threshold);
+  if (m.band && r.location.freq.band_hz) {
+    const auto [lo, hi] = *r.location.freq.band_hz;
+    s += fmt::format("; its answer departs from the model between {:.3g} and {:.3g} Hz over the "
+                     "whole record but {}",
+                     lo, hi,
+                     m.band_sides[0]   ? "before the event only"
+                     : m.band_sides[1] ? "after the event only"
+                                       : "on neither side of it alone");
+  }
   if (r.location.amp.sign_dependent)
     s += fmt::format(
         "; the answers to a rise and to a fall differ over the whole record (z {:.1f}) but on "
