@@ -203,8 +203,7 @@ BusFrequencyShare take_out_bus_frequency(DiagnoseInput& in, const Eigen::VectorX
   s.share_rms = std::sqrt(sc.squaredNorm() / static_cast<double>(sc.size()));
   // Not across a grid event: it moves the operating point by more than the small signal the
   // model holds for (the event is the level's step, taken out as such).
-  if (s.event_at <= 0)
-    refer_to_input(in, pr, f, freq_hz.mean(), residual, used, s);
+  if (s.event_at <= 0) refer_to_input(in, pr, f, freq_hz.mean(), residual, used, s);
   s.note = fmt::format(
       "the grid's share through the bus frequency ({:.3g} Hz rms; {:.3g} output units rms, "
       "{:.0f} % of the model's residual) is taken out first",

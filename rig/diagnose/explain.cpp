@@ -327,12 +327,13 @@ std::string operating_point_words(const DiagnoseResult& r) {
         t.cross_ratio, t.cross_threshold, m.cross_ratio, m.cross_threshold);
   if (m.band && r.location.freq.band_hz) {
     const auto [lo, hi] = *r.location.freq.band_hz;
-    s += fmt::format("; its answer departs from the model between {:.3g} and {:.3g} Hz over the "
-                     "whole record but {}",
-                     lo, hi,
-                     m.band_sides[0]   ? "before the event only"
-                     : m.band_sides[1] ? "after the event only"
-                                       : "on neither side of it alone");
+    s += fmt::format(
+        "; its answer departs from the model between {:.3g} and {:.3g} Hz over the "
+        "whole record but {}",
+        lo, hi,
+        m.band_sides[0]   ? "before the event only"
+        : m.band_sides[1] ? "after the event only"
+                          : "on neither side of it alone");
   }
   if (r.location.amp.sign_dependent)
     s += fmt::format(
