@@ -133,7 +133,7 @@ void refer_to_input(DiagnoseInput& in, const Problem& pr, const Eigen::VectorXd&
   const double se = std::sqrt((rb - a * gb).square().sum() / m / (sgg / m) / dof);
   s.input_per_hz = a;
   s.input_per_hz_se = se;
-  if (f0 > 0.0) s.droop_pct = -100.0 / (a * f0) * 100.0;
+  if (f0 > 0.0 && a < 0.0) s.droop_pct = -100.0 / (a * f0) * 100.0;  // else no droop (0)
   const double share = std::abs(a) * s.frequency_rms_hz / pr.scales.u_std;
   const auto [droop_lo, droop_hi] = thresholds::kReferredDroopPct;
   if (!(a < 0.0) || !(s.droop_pct >= droop_lo && s.droop_pct <= droop_hi) ||
