@@ -38,6 +38,15 @@ inline constexpr double kNonlinearOverLinearPct = 0.75;
 // g034, a deadband on the governor's error from 60 s: 0.60 points over a gain change from the same
 // onset).
 inline constexpr double kStaticMapOverLinearPct = kPenaltyPctPerParameter;
+// A play or a placed map from an onset stands in for a lag on its span only: it needs the
+// span's share of kNonlinearOverLinearPct over the best linear choice (verdict.cpp), but never
+// less than one parameter's penalty, what fitting noise alone buys a parameter. The share is of
+// the whole record, over which the validation blocks interleave, whether an onset or the
+// residual's located window gated the effect. Measured: droopsim seed 11 d037, a linkage play
+// from 99 s, 0.40 points over a delay from the same onset (the margin on its third of the
+// record 0.26); seed 11 d032, a speed-error deadband located at 102-135 s, 0.28 points over a
+// gain change there (margin 0.25, the floor).
+inline constexpr double kSpannedMarginFloorPct = kPenaltyPctPerParameter;
 // Another explanation within this many points of the verdict's score is named beside it in
 // the explanation (report.json "alternative"): the margin a nonlinearity needs over a linear
 // effect, below which the data do not tell two shapes apart.

@@ -24,6 +24,7 @@ using thresholds::kNestedMarginPct;
 using thresholds::kNonlinearOverLinearPct;
 using thresholds::kRedampZerosDamping;
 using thresholds::kRedampZerosFrequency;
+using thresholds::kSpannedMarginFloorPct;
 using thresholds::kStaticMapOverLinearPct;
 using thresholds::kUnseenInputGainPct;
 
@@ -67,10 +68,22 @@ bool sampling_convention_only(const HypothesisFit& h, const Problem& pr) {
 // hysteresis loop (an effect that needs the direction test's evidence).
 enum class Only { kAny, kLinear, kDirection };
 
+// The share of the record that h acts on (1 unless a window or an onset gated it): the
+// validation blocks interleave over the whole record (split.hpp).
+double span_share(const HypothesisFit& h, const Problem& pr) {
+  const auto n = pr.y.size();
+  const double own = static_cast<double>((h.active_to < 0 ? n : h.active_to) - h.active_from);
+  return n > 0 ? std::clamp(own / static_cast<double>(n), 0.0, 1.0) : 1.0;
+}
+
 // The margin h's nonlinearity needs over the best linear choice (thresholds.hpp): a static
-// map at a place without dynamics of its own needs less than a play or a placed map.
-double nonlinear_margin(const HypothesisFit& h, const DataScales& scales) {
-  return memoryless_static_maps_only(h, scales) ? kStaticMapOverLinearPct : kNonlinearOverLinearPct;
+// map at a place without dynamics of its own needs less than a play or a placed map. What
+// those gain by standing in for a lag grows with the record they act on: for an effect on a
+// span (from an onset, or in the located window) the margin is the span's share of it, never
+// under one parameter's penalty (kSpannedMarginFloorPct).
+double nonlinear_margin(const HypothesisFit& h, const Problem& pr) {
+  if (memoryless_static_maps_only(h, pr.scales)) return kStaticMapOverLinearPct;
+  return std::max(kSpannedMarginFloorPct, kNonlinearOverLinearPct * span_share(h, pr));
 }
 
 int choose_raw(const DiagnoseResult& r, double min_gain, Only only = Only::kAny) {
@@ -301,7 +314,7 @@ int choose(const DiagnoseResult& r, double min_gain, int* drift_set_aside) {
   if (has_nonlinearity(at(i)) && !(has_direction_effect(at(i)) && play_beyond_lag(r, at(i))) &&
       !level_evidenced(r, at(i))) {
     const int j = choose_raw(r, min_gain, Only::kLinear);
-    if (j >= 0 && at(j).score >= at(i).score - nonlinear_margin(at(i), r.problem.scales)) i = j;
+    if (j >= 0 && at(j).score >= at(i).score - nonlinear_margin(at(i), r.problem)) i = j;
   }
   i = account_for_gain_peak(r, i, min_gain);
   const int alone = without_immaterial_drift(r, i, min_gain);

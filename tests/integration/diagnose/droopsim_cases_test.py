@@ -87,6 +87,10 @@ judged against droopsim's own truth.
   * a speed-error deadband beside a slow combustion (seed 9 d078, `resonance` with a gain
     change before): `deadband` on the governor's error and `extra_lag` inside its loop,
     closing the loop with one feedback, both within 20 %.
+  * a linkage play from 100 s (seed 11 d037, `dead_time` before) and a speed-error deadband
+    located at 102-135 s (seed 11 d032, `gain_change` before): `backlash` after the PI and
+    `deadband` on the governor's error, both within 20 %, each under the whole record's
+    nonlinear margin over the linear effect but over its span's share of it.
 """
 import json
 import os
@@ -288,6 +292,38 @@ class DroopsimCases(unittest.TestCase):
         self.assertFalse(whole, "the whole record's level test shows it: not the span's case")
         self.assertGreater(rep["hypotheses"][rep["chosen"]]["active_span_s"][0], 90.0)
         self.check_effect(truths, rep, ("deadband",), "half_width")
+
+    def best_linear_score(self, rep):
+        nonlinear = ("deadband", "backlash", "hysteresis", "saturation", "rate_limit",
+                     "static_nonlinearity", "nonlinear_stiffness", "coulomb_friction")
+        return max(h["score"] for h in rep["hypotheses"]
+                   if h["effects"] and not any(e["effect"] in nonlinear for e in h["effects"]))
+
+    def test_a_linkage_play_from_100_s_needs_its_spans_share_of_the_margin(self):
+        # Benchmark seed 11 d037: the play after the PI from its onset at 98.8 s scores 0.40
+        # points over a delay from the same onset, under the whole record's 0.75-point margin
+        # but over the third of it that its span takes (`dead_time` before).
+        truths, rep = self.run_case("backlash", "late", 507655)
+        h = rep["hypotheses"][rep["chosen"]]
+        span = h["active_span_s"]
+        self.assertGreater(span[0], 90.0)
+        self.assertLess(span[1] - span[0], 0.5 * rep["samples"] * rep["dt_s"])
+        self.assertLess(h["score"] - self.best_linear_score(rep), 0.75,
+                        "it beats the linear effect by the whole margin: not the span's case")
+        self.check_effect(truths, rep, ("backlash",), "half_width", place="governor_pi")
+
+    def test_a_speed_error_deadband_from_100_s_in_a_located_window_needs_its_share(self):
+        # Benchmark seed 11 d032: the residual's level locates the deadband at 102-135 s, so
+        # every hypothesis is fitted there; the deadband on the governor's error scores 0.28
+        # points over the gain change, under the whole record's margin (`gain_change` before).
+        truths, rep = self.run_case("deadband", "late", 510170)
+        span = rep["location"]["active_span_s"]
+        self.assertGreater(span[0], 90.0)
+        gain = max(h["score"] for h in rep["hypotheses"]
+                   if [e["effect"] for e in h["effects"]] == ["gain_change"])
+        self.assertLess(rep["hypotheses"][rep["chosen"]]["score"] - gain, 0.75,
+                        "it beats the gain change by the whole margin: not the span's case")
+        self.check_effect(truths, rep, ("deadband",), "half_width", place="governor_error")
 
     def test_a_deadband_shown_by_both_the_level_and_the_play_tests_is_the_better_fit(self):
         # Benchmark seed 9 d033, behind the declared coupling: the level test and the direction

@@ -689,6 +689,30 @@ TEST(Verdict, AStaticMapWithoutDynamicsOfItsOwnNeedsOneParametersPenalty) {
             "gain_change");
 }
 
+// A play or a placed map on a span of the record (the residual's located window, or an onset)
+// stands in for a lag there only: it needs the span's share of the nonlinear margin over a
+// linear effect on the same span, never under one parameter's penalty (thresholds.hpp
+// kSpannedMarginFloorPct; droopsim seed 11 d037, a play after the PI from 99 s, 0.40 points
+// over a delay, and d032, a deadband on the governor's error at 102-135 s, 0.28 over a gain
+// change, were named the linear effects).
+TEST(Verdict, APlayOnASpanNeedsItsSpansShareOfTheMargin) {
+  const auto choice = [](Eigen::Index from, double play_score, double delay_score) {
+    const AppliedEffect play{Effect::kBacklash, {0.18}, Place::kInput};
+    const AppliedEffect delay{Effect::kDeadTime, {0.016}, Place::kInput};
+    DiagnoseResult r = ranked({{{play}, play_score}, {{delay}, delay_score}});
+    r.problem.dt_s = 0.02;
+    r.problem.y = white(1500, 10.0, 41);
+    r.problem.active_from = from;  // the located window: every hypothesis fitted there
+    for (auto& h : r.hypotheses) h.active_from = from;
+    r.location.amp.direction_z = -10.0;  // a play's evidence, not beyond a lag
+    return verdict_of(r.hypotheses[static_cast<std::size_t>(choose(r, 0.2))]);
+  };
+  EXPECT_EQ(choice(0, 3.86, 3.46), "dead_time");     // the whole record: 0.75
+  EXPECT_EQ(choice(1000, 3.86, 3.46), "backlash");   // its third: 0.25
+  EXPECT_EQ(choice(500, 3.86, 3.46), "dead_time");   // two thirds: 0.5
+  EXPECT_EQ(choice(1350, 3.86, 3.66), "dead_time");  // a tenth: the floor, 0.25
+}
+
 // The delay rule holds beside a drift too, and after an immaterial drift is dropped from the
 // choice (droopsim seed 4 d002, an injection delay from 100 s behind the grid's wander: the
 // lag in the loop 0.01 points over the delay there, named `extra_lag`).
