@@ -3,8 +3,11 @@
 #include <fmt/format.h>
 
 #include <chrono>
+#include <cmath>
+#include <cstdint>
 #include <memory>
 #include <optional>
+#include <string>
 #include <vector>
 
 #include "drivers/can/can_link.hpp"
@@ -160,6 +163,16 @@ SessionData run_commission(const TestConfig& config, const SessionOptions& optio
       data.exit_code = kExitSafety;
       data.outcome = std::string("rig failure: cannot write the recording: ") + e.what();
     }
+    // Found only by the last write (an emulated test can outrun the recorder's flusher, or a
+    // disk stall hold it): the rig failure a mid-test write trips on, the bias already back
+    // at its baseline. The report names it as that trip.
+    if (!data.trip)
+      data.trip = TripRecord{TripCause::kRigFailure,
+                             std::string("cannot write the recording (found when it was closed "
+                                         "at the end of the test): ") +
+                                 e.what(),
+                             static_cast<std::uint64_t>(
+                                 std::llround(ctx.loop.t_s() * data.config.link.sample_rate_hz))};
   }
   collect(data, ctx.loop);
   data.wall_time_s =

@@ -162,18 +162,17 @@ TEST(CommissionFaults, UnusableOrEarlierOutExits2AndForceClearsIt) {
             std::string::npos);
 }
 
-// A disk that fills during the test (here the file-size limit of the rig's process, 300 kB:
-// about 25 s of rows) is a failure of the rig itself: a supervisor trip with its own cause,
-// the bias ramped down and the enable cleared, exit 4, and a recording that still reads.
-TEST(CommissionFaults, FullDiskMidTestIsARigFailureTripExit4) {
-  const auto dir = fresh_dir("disk-full");
+// A disk that fills is a failure of the rig itself: a supervisor trip with its own cause, the
+// bias ramped down and the enable cleared, exit 4, and a recording that still reads. The limit
+// is the file-size limit of the rig's process (`ulimit -f`, in kB).
+void expect_full_disk_trip(const std::filesystem::path& dir, long limit_kb) {
   const auto out = dir / "out";
   const auto test = write_file(dir / "t.toml",
                                "[steady_state]\nduration_s = 3.0\n[pilot]\nduration_s = 5.0\n"
                                "[sweep]\nenabled = false\n");
-  const std::string cmd = fmt::format(
-      "bash -c 'ulimit -f 300; exec {} commission --emulate --quiet --test {} --out {}'",
-      (bin_dir() / "rig").string(), test.string(), out.string());
+  const std::string cmd =
+      fmt::format("bash -c 'ulimit -f {}; exec {} commission --emulate --quiet --test {} --out {}'",
+                  limit_kb, (bin_dir() / "rig").string(), test.string(), out.string());
   const int status = std::system((cmd + " > " + (dir / "rig.log").string() + " 2>&1").c_str());
   ASSERT_TRUE(WIFEXITED(status)) << "killed: " << read_text(dir / "rig.log");
   EXPECT_EQ(WEXITSTATUS(status), 4) << read_text(dir / "rig.log");
@@ -185,6 +184,7 @@ TEST(CommissionFaults, FullDiskMidTestIsARigFailureTripExit4) {
   EXPECT_EQ(report["safety"]["trip"]["cause"], "rig_failure");
   EXPECT_EQ(report["ramp_down"]["cleared"], true);
   EXPECT_EQ(report["model_written"], false);
+  EXPECT_FALSE(std::filesystem::exists(out / "model.json"));
   const auto rec = io::read_recording(out / "recording.csv");  // whole rows only
   EXPECT_GT(rec.rows(), 1000);
   const std::string text = read_text(out / "recording.csv");
@@ -193,6 +193,33 @@ TEST(CommissionFaults, FullDiskMidTestIsARigFailureTripExit4) {
   const auto sidecar = read_json(out / "recording.json");
   EXPECT_EQ(sidecar["complete"], false);
   EXPECT_EQ(sidecar["rows"].get<long>(), static_cast<long>(rec.rows()));
+}
+
+// Mid-test: 150 kB, about 22 s of the 53 s test's rows (some 69 bytes a row at 100 Hz), so
+// the recorder's flusher meets the limit with most of the test still to run. (At 300 kB the
+// limit fell in the last 15 % of an emulated test that runs in 2.4 s of wall time, and under
+// load the flusher sometimes first met it when the recording was closed.)
+TEST(CommissionFaults, FullDiskMidTestIsARigFailureTripExit4) {
+  expect_full_disk_trip(fresh_dir("disk-full"), 150);
+}
+
+// In the last rows: a limit 2 kB under the whole recording's size (measured by a first run),
+// which the flusher may meet only when the recording is closed at the end of the test: the
+// same rig failure, named as that trip (the bias already back at its baseline).
+TEST(CommissionFaults, FullDiskInTheLastRowsIsTheSameRigFailureTrip) {
+  const auto dir = fresh_dir("disk-full-last");
+  const auto whole = dir / "whole";
+  const auto test = write_file(dir / "t.toml",
+                               "[steady_state]\nduration_s = 3.0\n[pilot]\nduration_s = 5.0\n"
+                               "[sweep]\nenabled = false\n");
+  ASSERT_EQ(
+      run_rig("commission --emulate --quiet --test " + test.string() + " --out " + whole.string(),
+              dir / "whole.log"),
+      0)
+      << read_text(dir / "whole.log");
+  const auto size_kb =
+      static_cast<long>(std::filesystem::file_size(whole / "recording.csv") / 1024);
+  expect_full_disk_trip(dir, size_kb - 2);
 }
 
 TEST(CommissionFaults, LinkDropMidTestExit3AndRecordingReadable) {
