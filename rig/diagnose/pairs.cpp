@@ -148,17 +148,20 @@ bool fitted(const std::vector<Candidate>& cs, const AppliedEffect& a, const Appl
   });
 }
 
-// A forward step from the best input-side single that could be a verdict, and from the best
+// A forward step from the best input-side single that could be a verdict, from the best
 // linear one (a nonlinearity in the loop can stand in for a lag, and the lag's pair with a
-// gain is then never formed): each with every other input-side effect at its best place,
-// but for the pairs already among `existing`.
+// gain is then never formed) and from the best with a nonlinearity (a lag in the loop can
+// stand in for a hysteresis beside damper windings, droopsim s11 d079, and the hysteresis's
+// pair with the damping is then never formed): each with every other input-side effect at
+// its best place, but for the pairs already among `existing`.
 std::vector<Candidate> forward_pairs(const Problem& pr, const std::vector<HypothesisFit>& singles,
                                      const std::vector<Candidate>& existing, const Location& loc) {
   std::vector<Candidate> out;
-  for (const bool linear : {false, true}) {
+  enum class First { kAny, kLinear, kNonlinear };
+  for (const First kind : {First::kAny, First::kLinear, First::kNonlinear}) {
     const auto first = std::find_if(singles.begin(), singles.end(), [&](const HypothesisFit& h) {
       return h.effects.size() == 1 && has_input_side(h) && could_be_verdict(h, loc, pr.scales) &&
-             (!linear || !has_nonlinearity(h));
+             (kind == First::kAny || has_nonlinearity(h) == (kind == First::kNonlinear));
     });
     if (first == singles.end()) continue;
     const AppliedEffect& a = first->effects[0];

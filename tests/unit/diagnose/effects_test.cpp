@@ -171,6 +171,41 @@ TEST(Effects, LoadDampingChangesOnlyTheModesDamping) {
   EXPECT_NEAR(t.dc_gain(), g.dc_gain(), 1e-9 * g.dc_gain());
 }
 
+// A swing equation against the grid, P = (K + D s) delta with M s^2 delta = T - P, behind a
+// 50 ms lag: the power's response carries the damper's zero at K / D = w_n / (2 zeta).
+model::TransferFunction swing(double damping, bool damping_in_power) {
+  const double m = 3.0, k = 418.0;
+  model::TransferFunction tf;
+  tf.num = damping_in_power ? Eigen::VectorXd(Eigen::Vector2d(damping, k))
+                            : Eigen::VectorXd::Constant(1, k);
+  tf.den = poly_multiply(Eigen::Vector3d(m, damping, k), Eigen::Vector2d(0.05, 1.0));
+  return tf;
+}
+
+TEST(Effects, LoadDampingMovesTheDampersZeroWhenThePowerCarriesIt) {
+  const double d0 = 10.6;  // zeta 0.154 at 1.88 Hz
+  for (const bool in_power : {true, false}) {
+    const model::TransferFunction g = swing(d0, in_power);
+    const auto mode0 = dominant_mode(g);
+    ASSERT_TRUE(mode0);
+    // Half the damping: its ratio halves (all of it is D's), and so does D in P.
+    const AppliedEffect a{Effect::kLoadDamping, {0.5 * mode0->second}};
+    const auto t = augmented_tf(g, std::span<const AppliedEffect>(&a, 1));
+    const model::TransferFunction truth = swing(0.5 * d0, in_power);
+    for (const double f_hz : {0.1, 1.0, 1.88, 3.0, 8.0}) {
+      const auto want = truth.response(f_hz), got = t.response(f_hz);
+      EXPECT_NEAR(std::abs(got / want), 1.0, 1e-6) << f_hz << " Hz, in power " << in_power;
+      EXPECT_NEAR(std::arg(got / want), 0.0, 1e-6) << f_hz << " Hz, in power " << in_power;
+    }
+  }
+  // The one-pair form alone is not the halved damper: the zero is what differs.
+  const model::TransferFunction g = swing(d0, true);
+  model::TransferFunction poles_only = swing(0.5 * d0, true);
+  poles_only.num = g.num;
+  EXPECT_GT(std::abs(std::abs(poles_only.response(3.0) / swing(0.5 * d0, true).response(3.0)) - 1),
+            0.02);
+}
+
 TEST(Effects, GainChangeScales) {
   EXPECT_NEAR(std::abs(ratio(Effect::kGainChange, {0.8}, 1.3)), 0.8, 1e-12);
 }
