@@ -508,6 +508,23 @@ class DroopsimCases(unittest.TestCase):
                             rep["explanation"])
         self.assertGreater(h["validation_fit_after"], h["validation_fit_before"])
 
+    def test_an_actuator_hysteresis_beside_softer_damper_windings_are_both_named(self):
+        # Benchmark seed 11 d079: a lag in the governor's loop stands in for the hysteresis and
+        # was the best single, so its pairs were the only ones formed; the forward step from
+        # the best single with a nonlinearity pairs the hysteresis after the PI with the
+        # damping change, which then fits clearly better (`extra_lag` in the loop before).
+        truths, rep = self.run_case("hysteresis+load_damping", "pair", 495025)
+        h = rep["hypotheses"][rep["chosen"]]
+        got = {e["effect"]: e for e in h["effects"]}
+        self.assertEqual(sorted(got), ["hysteresis", "load_damping"], rep["explanation"])
+        zeta = got["load_damping"]["params"]["zeta"]
+        print(f"  load_damping zeta {zeta:.4f} against {truths[1]['truth']:.4f}", flush=True)
+        self.assertLess(abs(zeta - truths[1]["truth"]), PARAM_TOL * truths[1]["truth"])
+        lag = max(x["score"] for x in rep["hypotheses"]
+                  if [e["effect"] for e in x["effects"]] == ["extra_lag"])
+        self.assertGreater(h["score"], lag + 0.75, "not clearly better than the lag in the loop")
+        self.assertGreater(h["validation_fit_after"], h["validation_fit_before"])
+
     def test_a_gain_change_from_half_way_is_one_from_the_step(self):
         truths, rep = self.run_case("gain_change", "late", 840349)
         self.assertEqual(rep["verdict"], "gain_change", rep["explanation"])
