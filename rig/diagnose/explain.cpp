@@ -133,11 +133,17 @@ std::string step_gain_words(const StepGain& g) {
   const std::string measured =
       fmt::format("The input-driven response after the step is x{:.3f} +- {:.3f} of that before it",
                   1.0 + g.change, g.sd);
-  if (g.fires)
+  if (g.decisive)
     return measured + fmt::format(
                           " (z = {:.1f}), as the level's x{:.3f} says: a measurement gain with the "
                           "level in it changed, not the operating point. ",
                           g.z, g.level_ratio);
+  if (g.fires)
+    return measured + fmt::format(
+                          " (z = {:.1f}), as the level's x{:.3f} would ({:.0f} times as likely as "
+                          "no change): a gain with the level in it changed, rather than the "
+                          "operating point alone. ",
+                          g.z, g.level_ratio, std::exp(g.log_likelihood_ratio));
   const bool agrees =
       std::abs(g.change - (g.level_ratio - 1.0)) <= thresholds::kStepGainAgreeSds * g.sd;
   if (std::abs(g.z) > thresholds::kStepGainZ)
@@ -151,9 +157,10 @@ std::string step_gain_words(const StepGain& g) {
                           "it: the operating point changed. ",
                           g.level_ratio);
   return measured + fmt::format(
-                        ", consistent with a gain change of x{:.3f} but not by itself "
-                        "significant (|z| = {:.1f}, the bound is {:.0f}). ",
-                        g.level_ratio, std::abs(g.z), thresholds::kStepGainZ);
+                        ", consistent with a gain change of x{:.3f} but not much likelier than "
+                        "none ({:.1f} times; {:.0f} asked). ",
+                        g.level_ratio, std::exp(g.log_likelihood_ratio),
+                        thresholds::kStepGainLikelihoodRatio);
 }
 
 // An operating-point step found in the recording (find_level_shift).

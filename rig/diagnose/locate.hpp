@@ -111,8 +111,13 @@ struct StepGain {
   bool tested = false;
   double level_ratio = 1.0;                // 1 + step / the level before it
   double change = 0.0, sd = 0.0, z = 0.0;  // gain after minus gain before, relative to the model
-  // |z| beyond thresholds::kStepGainZ and the change within kStepGainAgreeSds of the level's.
+  // ln of how much likelier the level's change is than none: (z^2 - z_level^2) / 2.
+  double log_likelihood_ratio = 0.0;
+  // The change within kStepGainAgreeSds of the level's, and the ratio at least
+  // thresholds::kStepGainLikelihoodRatio.
   bool fires = false;
+  // ... and |z| beyond thresholds::kStepGainZ: decisive, a gain change whatever else scores.
+  bool decisive = false;
 };
 
 struct Location {

@@ -224,7 +224,8 @@ AmplitudeLocation locate_amplitude(const Problem& pr, const Eigen::VectorXd& r_a
 
 // r on [yh before the step, yh after it]: the difference of the two gains, its standard
 // deviation with the residual's correlation (Bartlett) and its z; it fires when the gain
-// moved significantly and by what the level's ratio says (a transducer's gain change).
+// moved by what the level's ratio says, and that reading is much likelier than no change
+// (a transducer's gain change).
 StepGain locate_step_gain(const Problem& pr, const Eigen::VectorXd& r_all,
                           const Eigen::VectorXd& yh_all, double level_ratio) {
   StepGain s;
@@ -247,8 +248,11 @@ StepGain locate_step_gain(const Problem& pr, const Eigen::VectorXd& r_all,
   s.change = fit.beta(1) - fit.beta(0);
   s.sd = std::sqrt(std::max(var, 1e-300));
   s.z = s.change / s.sd;
-  s.fires = std::abs(s.z) > thresholds::kStepGainZ &&
-            std::abs(s.change - (level_ratio - 1.0)) <= thresholds::kStepGainAgreeSds * s.sd;
+  const double z_level = (s.change - (level_ratio - 1.0)) / s.sd;
+  s.log_likelihood_ratio = 0.5 * (s.z * s.z - z_level * z_level);
+  s.fires = std::abs(z_level) <= thresholds::kStepGainAgreeSds &&
+            s.log_likelihood_ratio >= std::log(thresholds::kStepGainLikelihoodRatio);
+  s.decisive = s.fires && std::abs(s.z) > thresholds::kStepGainZ;
   return s;
 }
 

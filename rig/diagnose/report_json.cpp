@@ -56,7 +56,9 @@ json level_shift_json(const DiagnoseResult& r) {
                       {"gain_change", g.change},
                       {"gain_change_sd", g.sd},
                       {"z", g.z},
-                      {"fires", g.fires}};
+                      {"log_likelihood_ratio", g.log_likelihood_ratio},
+                      {"fires", g.fires},
+                      {"decisive", g.decisive}};
   return j;
 }
 

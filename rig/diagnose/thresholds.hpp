@@ -312,6 +312,14 @@ inline constexpr double kGridEventSpreads = 6.0;
 inline constexpr double kStepGainZ = 5.0;
 // ... and by what the level's step implies, within this many (a 99.7 % interval).
 inline constexpr double kStepGainAgreeSds = 3.0;
+// The test fires when the change agrees with the level's and the level's reading is at least
+// this many times as likely as an unchanged gain: the ratio of the two normal likelihoods,
+// exp((z^2 - z_level^2) / 2), z_level the change's distance from the level's in sd (Jeffreys'
+// "strong" evidence). An operating-point step that leaves the gain as it was passes with
+// probability at most 1.6 % whatever its size (the worst, a level ratio 2.1 sd from 1, needs
+// z > 2.15); any |z| beyond kStepGainZ that agrees passes (ratio >= e^8). gensim seed 5 g019,
+// a transducer gain 0.920 from 60 s: response x0.926 +- 0.032, z = -2.3, ratio 15.
+inline constexpr double kStepGainLikelihoodRatio = 10.0;
 
 // --- Where an input-side nonlinearity sits (placement.cpp) ---
 // The in-loop place's front lag T_f (the path from the bias to the nonlinearity: a

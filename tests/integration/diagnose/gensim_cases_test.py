@@ -23,6 +23,8 @@ these are the cases that pin a fixed behaviour:
   * a combustion lag (seed 4, g005) whose best Bouc-Wen stand-in stops at its most rounded
     shape: a lag, not a loop;
   * a fuel dead time (benchmark seed 1, g000): a linear effect, as a guard;
+  * a transducer gain change half-way (seed 5, g019), whose level step the response after
+    it agrees with, though by less than 5 sd from no change: `gain_change`, not a load step;
   * a null case with the set's operating nuisances (benchmark seed 1, g082): `none`;
   * a transducer's 8 % gain error on a 600 s record (seed 3's g015 at ten minutes), where
     the grid's wander keeps the fit's gain under the verdict's 0.2 points: named all the
@@ -136,6 +138,21 @@ class GensimCases(unittest.TestCase):
         h = rep["hypotheses"][rep["chosen"]]
         self.assertLess(h["score"], 0.2, rep["explanation"])
         self.assertIn("no longer correlated with the input", rep["explanation"])
+        got = h["effects"][0]["params"]["gain_ratio"]
+        self.assertLess(abs(got / truths[0]["truth"] - 1.0), PARAM_TOL, rep["explanation"])
+
+    def test_a_transducer_gain_change_half_way_is_told_from_a_load_step(self):
+        # Seed 5's g019: the CT ratio x0.92 from 60 s steps the level by -8 %; the response
+        # after the step is x0.926 +- 0.032 of that before (z = -2.3, under the old bound of
+        # 5), 15 times likelier as the level's change than as none (`none` before: the step
+        # was taken for a load step).
+        truths, rep, seed = self.run_case("gain_change", "large", "partial", 999176)
+        sg = rep["location"]["level_shift"]["step_gain"]
+        self.assertTrue(sg["fires"], rep["explanation"])
+        self.assertLess(abs(sg["z"]), 5.0, "no longer the case this test is about")
+        self.assertEqual(rep["verdict"], "gain_change", f"seed {seed}: {rep['explanation']}")
+        h = rep["hypotheses"][rep["chosen"]]
+        self.assertGreater(h["validation_fit_after"], h["validation_fit_before"])
         got = h["effects"][0]["params"]["gain_ratio"]
         self.assertLess(abs(got / truths[0]["truth"] - 1.0), PARAM_TOL, rep["explanation"])
 

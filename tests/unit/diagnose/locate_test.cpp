@@ -1,13 +1,16 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cstdio>
 #include <cmath>
 #include <vector>
 
 #include "concealed.hpp"
 #include "records.hpp"
+#include "rig/diagnose/augmented_model.hpp"
 #include "rig/diagnose/blocks.hpp"
 #include "rig/diagnose/diagnose.hpp"
+#include "rig/diagnose/locate.hpp"
 #include "rig/diagnose/split.hpp"
 
 namespace rig::diagnose {
@@ -146,6 +149,46 @@ TEST(Locate, TheResponseTellsAGainChangeFromAnOperatingPointStep) {
     const char* words = gain_change ? "not the operating point" : "the operating point changed";
     EXPECT_NE(r.explanation.find(words), std::string::npos) << r.explanation;
   }
+}
+
+// The step-gain test weighs the two readings of a level step (thresholds.hpp,
+// kStepGainLikelihoodRatio), on 300 seeded noise draws each: a gain change 3.5 sd of its own
+// test from none (|z| mostly under the old bound of 5) fires in most draws, and an
+// operating-point step leaves the gain as it was and fires in few, also at the step size
+// (2.15 sd) where that is likeliest.
+TEST(Locate, TheStepGainTestWeighsTheLevelsReadingAgainstNoChange) {
+  int blocks = 0;
+  Eigen::Index warm = 0;
+  Problem pr = prepare_problem(test::null_record(73), &blocks, &warm);
+  const Eigen::VectorXd yh = model_output(pr, {}).yhat;
+  const Eigen::Index n = yh.size(), half = n / 2;
+  pr.level_step_removed_at = half;
+  const double noise = 0.3 * test::rms(yh);
+  // The test's own sd at this noise (it does not depend on the level's ratio).
+  const double sd = locate_step_gain(pr, test::white(n, noise, 1), yh, 1.0).sd;
+  ASSERT_GT(sd, 0.0);
+  constexpr int kDraws = 300;
+  const auto fired = [&](double d_gain, double d_level) {
+    int count = 0;
+    for (int i = 0; i < kDraws; ++i) {
+      Eigen::VectorXd r = test::white(n, noise, 1000 + static_cast<std::uint64_t>(i));
+      r.tail(n - half) -= d_gain * sd * yh.tail(n - half);  // the gain after, minus 1
+      count += locate_step_gain(pr, r, yh, 1.0 - d_level * sd).fires ? 1 : 0;
+    }
+    std::printf("gain %.2f sd, level %.2f sd (sd %.4f): fired in %d of %d draws\n", d_gain,
+                d_level, sd, count, kDraws);
+    return count;
+  };
+  // A gain change of 3.5 sd: fires when z > 2.41 (1.75 + ln 10 / 3.5), in 86 % of draws;
+  // |z| > 5 alone would fire in 7 %.
+  EXPECT_GE(fired(3.5, 3.5), kDraws * 70 / 100);
+  // Operating-point steps that leave the gain: at most 1.6 % of draws (binomial, 300 draws:
+  // the mean 4.8, 12 is beyond its 99.9 % point).
+  EXPECT_LE(fired(0.0, 2.15), 12);
+  EXPECT_LE(fired(0.0, 3.5), 12);
+  // A gain change against the level's ratio (an operating point whose gain moved the other
+  // way) never agrees with it.
+  EXPECT_EQ(fired(-3.5, 3.5), 0);
 }
 
 // The value of y below which a fraction q of its samples lie.

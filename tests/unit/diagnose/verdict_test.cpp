@@ -461,7 +461,9 @@ TEST(Verdict, ALevelStepThatTheDynamicsGainMatchesIsAGainChange) {
   r.hypotheses[0].derived = {{"drift_rms", 50.0}, {"drift_rms_worst_half", 50.0}};
   EXPECT_EQ(choose(r, thresholds::kMinGainPct), 0);
   r.location.step_gain.tested = true;
-  r.location.step_gain.fires = true;
+  r.location.step_gain.fires = true;  // likelier than no change, but |z| under the bound
+  EXPECT_EQ(choose(r, thresholds::kMinGainPct), 0);
+  r.location.step_gain.decisive = true;
   EXPECT_EQ(choose(r, thresholds::kMinGainPct), 1);
 }
 
