@@ -90,10 +90,16 @@ bool play_beyond_lag(const DiagnoseResult& r, const HypothesisFit& h) {
 // span alone, as the direction test is (play_beyond_lag): the whole record's dilutes it
 // (droopsim seed 7 d032, a deadband from 100 s: chi^2 21.5 but the outer levels' gains 1.2 %
 // apart over the record, 27.2 and 8.2 % on its span).
+//
+// The sign test is such evidence too (thresholds.hpp kSignEvidenceZ): a gain that differs
+// between positive and negative excursions (droopsim seed 13 d027, a smoke limiter from
+// 100 s behind the wander, sign z -7.2: the limiter with the drift scored 0.13 points over a
+// gain change with it and was named `gain_change`).
 bool level_evidenced(const DiagnoseResult& r, const HypothesisFit& h) {
   const AmplitudeLocation& amp = r.location.amp;
   if (amp.two_level_input || !static_maps_only(h)) return false;
   if (LevelTest{amp.by_level, amp.level_chi2}.exceeds(thresholds::kLevelEvidenceChi2)) return true;
+  if (std::abs(amp.sign_z) > thresholds::kSignEvidenceZ) return true;
   if (!spanned_alone(r.problem, h)) return false;
   const Eigen::VectorXd residual = r.problem.y - r.baseline_yhat;
   return level_test(r.problem, residual, r.baseline_yhat, h.active_from, h.active_to)

@@ -161,6 +161,14 @@ inline constexpr double kLevelEvidenceChi2 = 13.28;
 // The sign and direction tests: |z| beyond this (the regression's standard error inflated by
 // the residual's correlation; 5: a false alarm in over a million records per test).
 inline constexpr double kSignDirectionZ = 5.0;
+// The sign test as evidence that tells a static map of the level from a linear effect fitted
+// as well (evidence.cpp level_evidenced): a gain that differs between positive and negative
+// excursions is what no gain, lag or delay gives, and a one-sided limit or a curved map does.
+// Behind drift, wander and grid events the test's z has heavier tails than its bound
+// assumes: of 391 records with a linear effect or none (droopsim seeds 1, 9-13, gensim seed
+// 5) the largest |z| is 5.5 (an AC coupling behind the wander), three nulls reach 4.5-4.9;
+// 59 of the 244 with a nonlinearity exceed 6.5, a margin of 1 over the linear records.
+inline constexpr double kSignEvidenceZ = 6.5;
 
 // --- Speed: screening the singles (screen.cpp) ---
 // Every single hypothesis (each effect at each place: about 35) is first searched with at

@@ -460,6 +460,15 @@ class DroopsimCases(unittest.TestCase):
         # the limit that follows the air, and was the verdict before that form.
         self.check_smoke_limiter(*self.run_case("saturation", "load_step", 458572))
 
+    def test_a_smoke_limiter_from_100_s_told_by_its_sign_test_is_a_saturation(self):
+        # Benchmark seed 13 d027: the response after 100 s is 0.89 of the model's on positive
+        # excursions and 1.04 on negative ones (sign z -7.2), what no gain change does; the
+        # limiter with the drift scored 0.13 points over the gain change with it, under the
+        # nonlinearity's margin, and the verdict was `gain_change`.
+        truths, rep = self.run_case("saturation", "late", 745931)
+        self.assertLess(rep["location"]["amplitude"]["sign_z"], -6.5, rep["explanation"])
+        self.check_effect(truths, rep, ("saturation",), "upper_limit")
+
     def test_a_smoke_limiter_dithered_by_the_ripple_is_a_saturation_beside_it(self):
         # Benchmark seed 1 d075: the half-order ripple rounds the limit's corner; a hard limit
         # fitted 1.9 points under the static map's kink, which was the verdict before the
