@@ -658,6 +658,33 @@ TEST(Verdict, ALevelMapShownByTheLevelTestIsNamedWithoutTheMargin) {
   EXPECT_EQ(choice(40.7, 0.3, false, Effect::kSaturation), "saturation");
 }
 
+// So does the sign test's finding, beyond its evidence bound (thresholds.hpp
+// kSignEvidenceZ): a gain that differs between positive and negative excursions is no gain
+// change's (droopsim seed 13 d027, a smoke limiter from 100 s behind the wander, sign z
+// -7.2: the limiter scored 0.13 points over a gain change, named `gain_change`).
+TEST(Verdict, ALevelMapShownByTheSignTestIsNamedWithoutTheMargin) {
+  const auto choice = [](double sign_z, bool two_level, Effect map) {
+    const AppliedEffect gain{Effect::kGainChange, {0.874}};
+    // loop_static_share, loop_derivative_s, loop_filter_s: a place with dynamics of its own.
+    const AppliedEffect in_loop{map, {1.26}, Place::kGovernorError, {-0.97, 0.035, 0.058}};
+    DiagnoseResult r = ranked({{{in_loop}, 10.14}, {{gain}, 10.01}});
+    r.location.amp.level_chi2 = 6.6;  // the level test shows nothing
+    r.location.amp.by_level = {{0.14, 0.89, 0.2}, {0.7, 0.97, 0.04}, {1.8, 0.95, 0.01}};
+    r.location.amp.sign_z = sign_z;
+    r.location.amp.two_level_input = two_level;
+    return verdict_of(r.hypotheses[static_cast<std::size_t>(choose(r, 0.2))]);
+  };
+  EXPECT_EQ(choice(-7.2, false, Effect::kSaturation), "saturation");
+  EXPECT_EQ(choice(+7.2, false, Effect::kSaturation), "saturation");
+  // Between the finding's bound (5) and the evidence bound, as linear records reach behind
+  // the wander: the margin holds.
+  EXPECT_EQ(choice(-5.5, false, Effect::kSaturation), "gain_change");
+  // On a two-level input the sign of the input is linear in it: no evidence.
+  EXPECT_EQ(choice(-7.2, true, Effect::kSaturation), "gain_change");
+  // A play's evidence is the direction test's.
+  EXPECT_EQ(choice(-7.2, false, Effect::kBacklash), "gain_change");
+}
+
 // A static map of the level at a place that fits no dynamics of its own is a gain at any one
 // amplitude: it needs one parameter's penalty over a linear effect, not the margin of a play
 // or a placed map, which can stand in for a lag (thresholds.hpp kStaticMapOverLinearPct;
