@@ -1,8 +1,10 @@
+#include "rig/diagnose/locate.hpp"
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
-#include <cstdio>
 #include <cmath>
+#include <cstdio>
 #include <vector>
 
 #include "concealed.hpp"
@@ -10,7 +12,6 @@
 #include "rig/diagnose/augmented_model.hpp"
 #include "rig/diagnose/blocks.hpp"
 #include "rig/diagnose/diagnose.hpp"
-#include "rig/diagnose/locate.hpp"
 #include "rig/diagnose/split.hpp"
 
 namespace rig::diagnose {
@@ -175,8 +176,8 @@ TEST(Locate, TheStepGainTestWeighsTheLevelsReadingAgainstNoChange) {
       r.tail(n - half) -= d_gain * sd * yh.tail(n - half);  // the gain after, minus 1
       count += locate_step_gain(pr, r, yh, 1.0 - d_level * sd).fires ? 1 : 0;
     }
-    std::printf("gain %.2f sd, level %.2f sd (sd %.4f): fired in %d of %d draws\n", d_gain,
-                d_level, sd, count, kDraws);
+    std::printf("gain %.2f sd, level %.2f sd (sd %.4f): fired in %d of %d draws\n", d_gain, d_level,
+                sd, count, kDraws);
     return count;
   };
   // A gain change of 3.5 sd: fires when z > 2.41 (1.75 + ln 10 / 3.5), in 86 % of draws;
