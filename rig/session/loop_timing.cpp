@@ -119,6 +119,7 @@ LoopTimingSummary LoopTimer::summary() const {
     s.jitter_mean_ms = mean(lateness_ms_);
     s.overruns = overruns_;
     s.realtime_priority = fifo_;
+    s.cpu_latency_held = cpu_latency_held_;
     s.slips = slips_;
     s.slip_total_ms = 1e3 * slip_total_s_;
   }

@@ -31,6 +31,7 @@ struct LoopTimingSummary {
   std::size_t slips = 0;           // cycles late by more than a period: the schedule moved
   double slip_total_ms = 0.0;      // by this much in all
   bool realtime_priority = false;  // the tick loop ran under SCHED_FIFO
+  bool cpu_latency_held = false;   // every CPU kept out of deep idle states (cpu_latency.hpp)
   // Both modes: wall time from the cycle start to the end of the read.
   double exchange_p50_ms = 0.0, exchange_p99_ms = 0.0, exchange_max_ms = 0.0;
   double exchange_mean_ms = 0.0;
@@ -51,6 +52,7 @@ class LoopTimer {
   // At the end of the read of the cycle most recently started.
   void exchange(double wall_s);
   void set_realtime_priority(bool fifo) { fifo_ = fifo; }
+  void set_cpu_latency_held(bool held) { cpu_latency_held_ = held; }
   // A long run (rig monitor) keeps only the last `cycles` to 2 `cycles` cycles' timings, so
   // that memory stays flat; the summary then describes those (cycles counts them all).
   void set_window(std::size_t cycles) { window_ = cycles; }
@@ -77,6 +79,7 @@ class LoopTimer {
   std::size_t slips_ = 0;
   double slip_total_s_ = 0.0;
   bool fifo_ = false;
+  bool cpu_latency_held_ = false;
 };
 
 // The q-quantile (0..1) of values by the nearest-rank rule; 0 for an empty vector.

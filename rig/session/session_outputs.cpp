@@ -182,6 +182,7 @@ json loop_timing_json(const std::optional<LoopTimingSummary>& t) {
     j["jitter_mean_ms"] = t->jitter_mean_ms;
     j["overruns"] = t->overruns;
     j["realtime_priority"] = t->realtime_priority;
+    j["cpu_latency_held"] = t->cpu_latency_held;
     j["slips"] = t->slips;
     j["slip_total_ms"] = t->slip_total_ms;
   }

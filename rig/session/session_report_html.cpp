@@ -33,10 +33,12 @@ std::string loop_timing_text(const LoopTimingSummary& t) {
   }
   return fmt::format(
       "realtime at {:.0f} Hz: cycle start late by p50 {:.3f} ms, p99 {:.3f} ms, "
-      "max {:.2f} ms; {} overruns in {} cycles, schedule moved {} times by {:.0f} ms in "
-      "all ({}); {}",
+      "max {:.2f} ms; {} overruns in {} cycles, schedule moved {} time{} by {:.0f} ms "
+      "in all ({}{}); {}",
       1e3 / t.period_ms, t.jitter_p50_ms, t.jitter_p99_ms, t.jitter_max_ms, t.overruns, t.cycles,
-      t.slips, t.slip_total_ms, t.realtime_priority ? "SCHED_FIFO" : "normal priority", exchange);
+      t.slips, t.slips == 1 ? "" : "s", t.slip_total_ms,
+      t.realtime_priority ? "SCHED_FIFO" : "normal priority",
+      t.cpu_latency_held ? ", CPUs kept out of deep idle" : "", exchange);
 }
 
 void summary(report::HtmlReport& page, const SessionData& d) {

@@ -99,6 +99,7 @@ void TickLoop::pace() {
   if (ticks_ == 0) {
     fifo_ = set_fifo(true);
     timer_.set_realtime_priority(fifo_);
+    timer_.set_cpu_latency_held(hold_cpu_latency_ && cpu_latency_.acquire());
     start_ = Clock::now();
   }
   const auto due =
@@ -250,6 +251,9 @@ void TickLoop::configure_long_run(bool keep_recording) {
   recording_ = keep_recording;
   tracing_ = false;
   abort_trips_ = false;
+  // Months of holding every CPU out of idle would cost power and heat for little: a monitor
+  // records its slips instead.
+  hold_cpu_latency_ = false;
   timer_.set_window(static_cast<std::size_t>(600.0 / dt_s_));
 }
 

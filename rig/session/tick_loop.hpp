@@ -12,6 +12,7 @@
 #include "drivers/governor_link.hpp"
 #include "rig/io/recording_writer.hpp"
 #include "rig/live/feed.hpp"
+#include "rig/session/cpu_latency.hpp"
 #include "rig/session/live_publish.hpp"
 #include "rig/session/live_view.hpp"
 #include "rig/session/loop_timing.hpp"
@@ -112,6 +113,8 @@ class TickLoop {
   std::chrono::steady_clock::time_point cycle_start_;
   LoopTimer timer_;
   bool fifo_ = false;
+  bool hold_cpu_latency_ = true;  // a long run (rig monitor) lets the CPUs idle
+  CpuLatencyHold cpu_latency_;
   LiveStatus status_;
   LivePublisher live_;
   SupervisorState supervisor_state_ = SupervisorState::kIdle;
