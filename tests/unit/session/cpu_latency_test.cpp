@@ -28,7 +28,7 @@ TEST(CpuLatencyHold, HoldsTheLatencyTargetAtZeroUntilReleased) {
   if (::access(kDevice, W_OK) != 0) GTEST_SKIP() << kDevice << " is not writable (not root)";
   const auto before = latency_target_us();
   ASSERT_TRUE(before.has_value());
-  ASSERT_GT(*before, 0) << "another process already holds the CPUs out of idle";
+  if (*before == 0) GTEST_SKIP() << "another process already holds the target at 0 us";
   {
     CpuLatencyHold hold;
     EXPECT_FALSE(hold.held());
