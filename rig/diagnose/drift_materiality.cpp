@@ -9,6 +9,7 @@
 namespace rig::diagnose {
 namespace {
 
+using thresholds::kDriftClearGainPct;
 using thresholds::kDriftMaterialFraction;
 using thresholds::kDriftMaterialGainPct;
 using thresholds::kDriftMaterialOfLevel;
@@ -36,8 +37,10 @@ bool within_transducer_accuracy(const HypothesisFit& h, const Problem& pr) {
 // operating level, or when modelling it raises the validation fit enough (thresholds.hpp).
 bool immaterial_drift(const HypothesisFit& h, const Problem& pr) {
   if (h.effects.size() != 1 || h.effects[0].effect != Effect::kDrift) return false;
+  const double gain_pct = h.validation_fit_after - h.validation_fit_before;
+  if (gain_pct >= kDriftClearGainPct) return false;
   if (within_transducer_accuracy(h, pr)) return true;
-  if (h.validation_fit_after - h.validation_fit_before >= kDriftMaterialGainPct) return false;
+  if (gain_pct >= kDriftMaterialGainPct) return false;
   return derived_of(h, "drift_rms") < kDriftMaterialFraction * pr.scales.z_std;
 }
 

@@ -238,6 +238,29 @@ TEST(Verdict, ADriftFromHalfWayIsJudgedWhereItIs) {
   EXPECT_EQ(choose(r, thresholds::kMinGainPct), -1);
 }
 
+// Within a transducer's accuracy a drift is still material when modelling it raises the
+// validation fit by kDriftClearGainPct (gensim seed 6 g065: 20 kW over 120 s, 0.12 % of the
+// level, +20.8 points; the nulls' nuisance drifts gained at most 5.5).
+TEST(Verdict, ADriftTheFitShowsClearlyIsMaterialWithinTheTransducersAccuracy) {
+  DiagnoseResult r;
+  r.problem.y = white(1000, 10.0, 18);
+  r.problem.y_level = 3200.0;
+  r.problem.scales.z_std = 12.0;
+  HypothesisFit drift;
+  drift.effects = {AppliedEffect{Effect::kDrift, {5.0}, Place::kInput, {}}};
+  drift.validation_fit_before = 42.8;
+  drift.derived = {{"drift_rms", 0.0012 * 3200.0}, {"drift_rms_worst_half", 0.0015 * 3200.0}};
+  const auto chosen_with_gain = [&](double gain_pct) {
+    r.hypotheses = {drift};
+    r.hypotheses[0].validation_fit_after = 42.8 + gain_pct;
+    r.hypotheses[0].score = gain_pct;
+    return choose(r, thresholds::kMinGainPct);
+  };
+  EXPECT_EQ(chosen_with_gain(thresholds::kDriftClearGainPct + 0.1), 0);
+  EXPECT_EQ(chosen_with_gain(thresholds::kDriftClearGainPct - 0.1), -1);
+  EXPECT_EQ(chosen_with_gain(5.5), -1) << "as much as a null's nuisance drift gained";
+}
+
 // An input-side effect whose pair with an immaterial drift scores under the drift alone adds
 // nothing: it is never named, not even as the fallback when the input tests fired (droopsim
 // seed 1 d081, a null: the sign test fired on the fuel map's own curvature, and a friction
