@@ -113,6 +113,32 @@ int choose_raw(const DiagnoseResult& r, double min_gain, Only only = Only::kAny)
   return best_any;
 }
 
+// The verdict family of a word: a lag wherever it sits, a play with or without a loop.
+std::string family_of(const std::string& word) {
+  if (word == "sensor_lag") return "extra_lag";
+  if (word == "hysteresis") return "backlash";
+  return word;
+}
+
+// The effects of h by family, sorted (their places aside).
+std::vector<std::string> families(const HypothesisFit& h) {
+  std::vector<std::string> out;
+  for (const auto& e : h.effects) out.push_back(family_of(to_string(e.effect)));
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+// Some linear hypothesis with g's effects (by family) at other places scores at least `bar`,
+// whether or not its places' fits stopped at a bound.
+bool fits_at_a_bound(const DiagnoseResult& r, const HypothesisFit& g, double bar) {
+  const auto want = families(g);
+  for (const auto& h : r.hypotheses) {
+    if (h.score < bar) break;  // ranked
+    if (!has_nonlinearity(h) && families(h) == want) return true;
+  }
+  return false;
+}
+
 }  // namespace
 
 // The score of the same hypothesis without its input-side effects (0 when it has no
@@ -312,11 +338,18 @@ int choose(const DiagnoseResult& r, double min_gain, int* drift_set_aside) {
   }
   // A nonlinearity must beat the best linear explanation by a margin (thresholds.hpp),
   // unless it is a play the data show beyond a lag, or a static map of the level where the
-  // level test showed the gain depend on the input's amplitude.
+  // level test showed the gain depend on the input's amplitude. The linear explanation is
+  // judged by its effects' best fit at any place: where one stopped at a place's bound (a
+  // lag in the governor's loop whose feedback wants a static share over 2), the shape that
+  // fits is that linear effect, and what the nonlinearity gains over its credible place is
+  // that place's shortfall, not evidence of a nonlinearity (gensim seed 6 g005, a 90 ms
+  // combustion lag: the lag in the loop 17.63, a play after the PI 16.25, the lag at the
+  // input 14.87; it was named `backlash`).
   if (has_nonlinearity(at(i)) && !(has_direction_effect(at(i)) && play_beyond_lag(r, at(i))) &&
       !level_evidenced(r, at(i))) {
     const int j = choose_raw(r, min_gain, Only::kLinear);
-    if (j >= 0 && at(j).score >= at(i).score - nonlinear_margin(at(i), r.problem)) i = j;
+    const double bar = at(i).score - nonlinear_margin(at(i), r.problem);
+    if (j >= 0 && (at(j).score >= bar || fits_at_a_bound(r, at(j), bar))) i = j;
   }
   i = account_for_gain_peak(r, i, min_gain);
   const int alone = without_immaterial_drift(r, i, min_gain);
@@ -328,12 +361,7 @@ int choose(const DiagnoseResult& r, double min_gain, int* drift_set_aside) {
 int close_alternative(const DiagnoseResult& r) {
   const HypothesisFit* h = r.chosen();
   if (!h) return -1;
-  const auto family = [](const std::string& word) {
-    if (word == "sensor_lag") return std::string("extra_lag");
-    if (word == "hysteresis") return std::string("backlash");
-    return word;
-  };
-  const std::string word = family(verdict_of(*h));
+  const std::string word = family_of(verdict_of(*h));
   // One fitted beside the drift the verdict set aside is judged against that pair.
   const HypothesisFit* pair = set_aside_drift_pair(r);
   for (std::size_t j = 0; j < r.hypotheses.size(); ++j) {
@@ -343,7 +371,7 @@ int close_alternative(const DiagnoseResult& r) {
     if (r.explained_below_min_gain && !(g.score > thresholds::kExplainedBelowMinGainPct)) break;
     if (pair && has_drift(g) && g.score < pair->score - thresholds::kCloseAlternativePct) continue;
     if (static_cast<int>(j) == r.chosen_index || !has_input_side(g) ||
-        family(verdict_of(g)) == word || !could_be_verdict(g, r.location, r.problem.scales))
+        family_of(verdict_of(g)) == word || !could_be_verdict(g, r.location, r.problem.scales))
       continue;
     // Behind a disturbance the input tests missed, only what the verdict would name.
     if (!r.location.input_mismatch && r.location.clip.side == 0 &&

@@ -22,6 +22,8 @@ these are the cases that pin a fixed behaviour:
     blind search of every input-side effect, named by what it adds;
   * a combustion lag (seed 4, g005) whose best Bouc-Wen stand-in stops at its most rounded
     shape: a lag, not a loop;
+  * a combustion lag (seed 6, g005) that fits best inside the governor's loop with the
+    loop's feedback at its bound: a lag, not a play after the PI;
   * a fuel dead time (benchmark seed 1, g000): a linear effect, as a guard;
   * a transducer gain change half-way (seed 5, g019), whose level step the response after
     it agrees with, though by less than 5 sd from no change: `gain_change`, not a load step;
@@ -121,6 +123,26 @@ class GensimCases(unittest.TestCase):
         _, rep, seed = self.run_case("extra_lag", "large", "plain", 976243)
         self.assertIn(rep["verdict"], ("extra_lag", "sensor_lag"),
                       f"seed {seed}: {rep['explanation']}")
+
+    def test_a_combustion_lag_is_not_a_play_where_the_loop_lag_stops_at_its_bound(self):
+        # Seed 6's g005: the 90 ms lag fits best inside the governor's loop, but there its
+        # feedback's static share stops at the bound of 2; a play after the PI then beat the
+        # lag at the input by 1.4 points, without a level or direction effect of its own, and
+        # was named `backlash`.
+        truths, rep, seed = self.run_case("extra_lag", "large", "plain", 369067)
+        self.assertIn(rep["verdict"], ("extra_lag", "sensor_lag"),
+                      f"seed {seed}: {rep['explanation']}")
+        loop = next(h for h in rep["hypotheses"]
+                    if [(e["effect"], e["place"]) for e in h["effects"]]
+                    == [("extra_lag", "governor_loop")])
+        play = next(h for h in rep["hypotheses"] if h["effects"][0]["effect"] == "backlash")
+        self.assertGreaterEqual(loop["params"]["loop_static_share"], 0.98 * 2.0,
+                                "the loop's lag no longer stops at its bound: not this case")
+        self.assertGreater(loop["score"], play["score"], "not the case of this test")
+        h = rep["hypotheses"][rep["chosen"]]
+        self.assertGreater(h["validation_fit_after"], h["validation_fit_before"])
+        got = h["effects"][0]["params"]["time_constant_s"]
+        self.assertLess(abs(got / truths[0]["truth"] - 1.0), PARAM_TOL, rep["explanation"])
 
     def test_a_longer_fuel_dead_time_is_a_dead_time(self):
         truths, rep, seed = self.run_case("dead_time", "large", "plain", 473189)

@@ -799,5 +799,36 @@ TEST(Verdict, ALagNoBetterThanADelayBesideADriftIsTheDelay) {
   EXPECT_EQ(verdict_of(chosen()), "extra_lag");
 }
 
+
+// A play without evidence of its own (no level dependence, no direction effect beyond a lag)
+// is not named over a lag that fits better inside the governor's loop though its feedback's
+// share stopped at the bound: the lag is named where it is credible, at the input (gensim
+// seed 6 g005, a 90 ms combustion lag: the lag in the loop 17.63, a play after the PI 16.25,
+// the lag at the input 14.87, and the play was named).
+TEST(Verdict, APlayIsNotNamedOverALagThatFitsBetterAtItsPlacesBound) {
+  const auto choice = [](double loop_share, double loop_lag_score) {
+    // a, T_d, T_h: the feedback's static share at its bound of 2 or inside it.
+    const AppliedEffect in_loop{
+        Effect::kExtraLag, {0.054}, Place::kGovernorLoop, {loop_share, 0.0, 0.26}};
+    // half_width; integral_time_s, filter_lag_s
+    const AppliedEffect play{Effect::kBacklash, {0.24}, Place::kPiLoop, {0.49, 0.34}};
+    std::vector<std::pair<std::vector<AppliedEffect>, double>> hs{
+        {{in_loop}, loop_lag_score},
+        {{play}, 16.25},
+        {{{Effect::kSensorLag, {0.066}, Place::kInput}}, 14.87}};
+    std::sort(hs.begin(), hs.end(),
+              [](const auto& a, const auto& b) { return a.second > b.second; });
+    DiagnoseResult r = ranked(hs);
+    r.location.amp.direction_z = -9.8;  // a lag's direction effect
+    r.location.amp.direction_beyond_lag_z = -0.07;
+    r.location.amp.level_chi2 = 1.2;
+    return verdict_of(r.hypotheses[static_cast<std::size_t>(choose(r, 0.2))]);
+  };
+  EXPECT_EQ(choice(1.978, 17.63), "sensor_lag");  // at the bound, above the play
+  EXPECT_EQ(choice(1.978, 15.60), "sensor_lag");  // at the bound, within the margin
+  EXPECT_EQ(choice(1.978, 15.40), "backlash");    // at the bound, below the margin
+  EXPECT_EQ(choice(1.2, 17.63), "extra_lag");     // credible: named where it fits
+}
+
 }  // namespace
 }  // namespace rig::diagnose
