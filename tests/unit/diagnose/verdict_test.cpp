@@ -799,7 +799,6 @@ TEST(Verdict, ALagNoBetterThanADelayBesideADriftIsTheDelay) {
   EXPECT_EQ(verdict_of(chosen()), "extra_lag");
 }
 
-
 // A play without evidence of its own (no level dependence, no direction effect beyond a lag)
 // is not named over a lag that fits better inside the governor's loop though its feedback's
 // share stopped at the bound: the lag is named where it is credible, at the input (gensim
