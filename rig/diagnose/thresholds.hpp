@@ -283,6 +283,14 @@ inline constexpr double kRolloffHighFrom = 2.0;
 inline constexpr double kRolloffHighTo = 4.0;
 inline constexpr double kRolloffLowFrom = 0.25;
 inline constexpr double kRolloffLowTo = 0.5;
+// What a first-order lag alone makes of white noise over those bands: the mean of
+// 1 / (1 + (f/fc)^2) over [2 fc, 4 fc], (atan 4 - atan 2) / 2, over that over [fc/4, fc/2],
+// 4 (atan 0.5 - atan 0.25): 0.1094 / 0.8747 = 0.125. A ratio under half of it falls off more
+// steeply than the lag can make it: the residual has a colour of its own (a disturbance the
+// plant filters, gensim's grid wander through the swing mode: 0.02-0.07 for a combustion lag
+// and a transducer lag alike), and the roll-off no longer tells the transducer from the plant.
+inline constexpr double kLagWhiteNoiseRolloff = 0.125;
+inline constexpr double kRolloffOwnColourShare = 0.5;
 
 // --- Effects present in part of the record (split.cpp gate_to_windows, onset.cpp) ---
 // The residual's windows out of bounds gate the input-side effects to their span when they

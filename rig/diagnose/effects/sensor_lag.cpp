@@ -9,6 +9,7 @@
 
 #include "rig/diagnose/diagnose.hpp"
 #include "rig/diagnose/effects/common.hpp"
+#include "rig/diagnose/thresholds.hpp"
 
 namespace rig::diagnose {
 namespace {
@@ -22,6 +23,13 @@ std::string meaning(const AppliedEffect& e, const HypothesisFit& h, const Proble
         "the measurement lags by {:.0f} ms more than modelled (corner {:.1f} Hz, too near "
         "half the sample rate for the noise to tell the transducer from the plant)",
         1e3 * p[0], 1.0 / (2.0 * std::numbers::pi * p[0]));
+  }
+  if (ratio < thresholds::kRolloffOwnColourShare * thresholds::kLagWhiteNoiseRolloff) {
+    return fmt::format(
+        "the measurement lags by {:.0f} ms more than modelled (the noise above the corner is "
+        "{:.2f} of that below, a steeper fall than the {:.3f} the lag gives white noise: the "
+        "noise has a colour of its own and does not tell the transducer from the plant)",
+        1e3 * p[0], ratio, thresholds::kLagWhiteNoiseRolloff);
   }
   return fmt::format(
       "the measurement lags by {:.0f} ms more than modelled; the noise is filtered "

@@ -68,6 +68,25 @@ TEST(Effects, LagIsThreeDecibelsDownAtItsCorner) {
   EXPECT_NEAR(std::arg(ratio(Effect::kSensorLag, {t}, fc)), -std::numbers::pi / 4, 1e-9);
 }
 
+// The transducer is named from the noise's roll-off only where a lag can have made it: a
+// residual that falls off far more steeply than a lag makes white noise has a colour of its
+// own (gensim's grid wander through the swing mode: 0.02-0.07), and says nothing of where
+// the lag sits.
+TEST(Effects, ALagIsTheTransducersOnlyWhereTheNoisesRollOffCanBeTheLags) {
+  const auto said = [](double ratio) {
+    HypothesisFit h;
+    h.effects = {AppliedEffect{Effect::kSensorLag, {0.066}}};
+    h.derived = {{"noise_rolloff_ratio", ratio}};
+    return effect_model(Effect::kSensorLag).explain(h.effects[0], h, Problem{});
+  };
+  EXPECT_NE(said(0.12).find("so it is the transducer"), std::string::npos) << said(0.12);
+  EXPECT_NE(said(0.07).find("so it is the transducer"), std::string::npos) << said(0.07);
+  const std::string coloured = said(0.03);
+  EXPECT_EQ(coloured.find("so it is the transducer"), std::string::npos) << coloured;
+  EXPECT_NE(coloured.find("does not tell the transducer from the plant"), std::string::npos)
+      << coloured;
+}
+
 TEST(Effects, ResonancePeaksByItsRatioAndIsFlatAway) {
   EXPECT_NEAR(std::abs(ratio(Effect::kResonance, {3.0, 0.05, 2.5, 1.0}, 3.0)), 2.5, 1e-9);
   EXPECT_NEAR(std::abs(ratio(Effect::kResonance, {3.0, 0.05, 2.5, 1.0}, 0.05)), 1.0, 1e-3);
