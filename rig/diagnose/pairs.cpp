@@ -258,7 +258,9 @@ std::vector<Candidate> credible_pairs(const std::vector<HypothesisFit>& singles,
       if (best == singles.end() || fitted(fitted_pairs, best->effects[0], other) ||
           fitted(out, best->effects[0], other))
         continue;
-      out.push_back({{best->effects[0], other}});
+      std::vector<AppliedEffect> pair = h->effects;  // its order: the better single first
+      pair[k] = best->effects[0];
+      out.push_back({pair});
     }
   }
   return out;
