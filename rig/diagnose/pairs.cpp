@@ -234,6 +234,17 @@ std::vector<Candidate> simpler_pairs(const std::vector<HypothesisFit>& singles,
 // g073, g075: a transducer's lag or gain beside the combustion's lag or damper windings).
 std::vector<Candidate> credible_pairs(const std::vector<HypothesisFit>& singles,
                                       const std::vector<HypothesisFit>& pairs) {
+  // A pair fitted with the lag's other word at the same place is the same model (the
+  // sensor lag's twin, search.cpp): fitted again it would only tie with it.
+  const auto fitted_or_twin = [](const std::vector<Candidate>& cs, const AppliedEffect& a,
+                                 const AppliedEffect& b) {
+    const auto twin = [](AppliedEffect e) {
+      if (e.effect == Effect::kExtraLag || e.effect == Effect::kSensorLag)
+        e.effect = e.effect == Effect::kExtraLag ? Effect::kSensorLag : Effect::kExtraLag;
+      return e;
+    };
+    return fitted(cs, a, b) || fitted(cs, twin(a), b) || fitted(cs, a, twin(b));
+  };
   std::vector<const HypothesisFit*> stopped;
   std::vector<Candidate> fitted_pairs;
   for (const auto& h : pairs) {
@@ -255,12 +266,18 @@ std::vector<Candidate> credible_pairs(const std::vector<HypothesisFit>& singles,
         return g.effects.size() == 1 && e.effect == at_bound.effect && e.place != at_bound.place &&
                place_credible(e) && pairable(e, other);
       });
-      if (best == singles.end() || fitted(fitted_pairs, best->effects[0], other) ||
-          fitted(out, best->effects[0], other))
+      if (best == singles.end() || fitted_or_twin(fitted_pairs, best->effects[0], other) ||
+          fitted_or_twin(out, best->effects[0], other))
         continue;
-      std::vector<AppliedEffect> pair = h->effects;  // its order: the better single first
-      pair[k] = best->effects[0];
-      out.push_back({pair});
+      // The better single first (it names the verdict): the moved effect's single at its
+      // credible place against the other's single at its place.
+      const auto other_single = std::find_if(singles.begin(), singles.end(), [&](const auto& g) {
+        return g.effects.size() == 1 && g.effects[0].effect == other.effect &&
+               g.effects[0].place == other.place;
+      });
+      const bool moved_first = other_single == singles.end() || best->score >= other_single->score;
+      out.push_back({moved_first ? std::vector{best->effects[0], other}
+                                 : std::vector{other, best->effects[0]}});
     }
   }
   return out;
