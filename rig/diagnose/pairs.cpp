@@ -226,6 +226,63 @@ std::vector<Candidate> simpler_pairs(const std::vector<HypothesisFit>& singles,
   return out;
 }
 
+// The best few pairs with an effect whose place stopped at a bound (place_credible, which the
+// verdict skips) refitted with that effect at its best credible single place, started from the
+// other effect as the pair fitted it. The forward pairs take each effect at its best single
+// place: a lag inside the governor's loop whose feedback stops at its bound beside a damping
+// or gain change was fitted, the lag's credible place at the input beside it never (gensim
+// g073, g075: a transducer's lag or gain beside the combustion's lag or damper windings).
+std::vector<Candidate> credible_pairs(const std::vector<HypothesisFit>& singles,
+                                      const std::vector<HypothesisFit>& pairs) {
+  // A pair fitted with the lag's other word at the same place is the same model (the
+  // sensor lag's twin, search.cpp): fitted again it would only tie with it.
+  const auto fitted_or_twin = [](const std::vector<Candidate>& cs, const AppliedEffect& a,
+                                 const AppliedEffect& b) {
+    const auto twin = [](AppliedEffect e) {
+      if (e.effect == Effect::kExtraLag || e.effect == Effect::kSensorLag)
+        e.effect = e.effect == Effect::kExtraLag ? Effect::kSensorLag : Effect::kExtraLag;
+      return e;
+    };
+    return fitted(cs, a, b) || fitted(cs, twin(a), b) || fitted(cs, a, twin(b));
+  };
+  std::vector<const HypothesisFit*> stopped;
+  std::vector<Candidate> fitted_pairs;
+  for (const auto& h : pairs) {
+    if (h.effects.size() != 2) continue;
+    fitted_pairs.push_back({h.effects});
+    if (!std::all_of(h.effects.begin(), h.effects.end(), place_credible)) stopped.push_back(&h);
+  }
+  std::sort(stopped.begin(), stopped.end(),
+            [](const HypothesisFit* a, const HypothesisFit* b) { return a->score > b->score; });
+  if (stopped.size() > kRefinedForwardPairs) stopped.resize(kRefinedForwardPairs);
+  std::vector<Candidate> out;
+  for (const HypothesisFit* h : stopped) {
+    for (std::size_t k = 0; k < 2; ++k) {
+      const AppliedEffect& at_bound = h->effects[k];
+      const AppliedEffect& other = h->effects[1 - k];
+      if (place_credible(at_bound) || !place_credible(other)) continue;
+      const auto best = std::find_if(singles.begin(), singles.end(), [&](const HypothesisFit& g) {
+        const AppliedEffect& e = g.effects[0];
+        return g.effects.size() == 1 && e.effect == at_bound.effect && e.place != at_bound.place &&
+               place_credible(e) && pairable(e, other);
+      });
+      if (best == singles.end() || fitted_or_twin(fitted_pairs, best->effects[0], other) ||
+          fitted_or_twin(out, best->effects[0], other))
+        continue;
+      // The better single first (it names the verdict): the moved effect's single at its
+      // credible place against the other's single at its place.
+      const auto other_single = std::find_if(singles.begin(), singles.end(), [&](const auto& g) {
+        return g.effects.size() == 1 && g.effects[0].effect == other.effect &&
+               g.effects[0].place == other.place;
+      });
+      const bool moved_first = other_single == singles.end() || best->score >= other_single->score;
+      out.push_back({moved_first ? std::vector{best->effects[0], other}
+                                 : std::vector{other, best->effects[0]}});
+    }
+  }
+  return out;
+}
+
 // When a disturbance dominates the residual, each input-side nonlinearity was placed (its
 // best place ranked) without it: every other place of it is paired with that disturbance
 // too, screened as the forward pairs are (a governor's error deadband behind a drift).

@@ -43,6 +43,12 @@ std::vector<Candidate> forward_pairs(const Problem& problem,
 std::vector<Candidate> simpler_pairs(const std::vector<HypothesisFit>& singles,
                                      std::vector<const HypothesisFit*> pairs);
 
+// For the best few fitted pairs with an effect whose place stopped at a bound, the pair with
+// that effect at its best credible single place beside the same other effect (not among
+// `pairs`).
+std::vector<Candidate> credible_pairs(const std::vector<HypothesisFit>& singles,
+                                      const std::vector<HypothesisFit>& pairs);
+
 // When a disturbance dominates the residual: every other place of each input-side
 // nonlinearity paired with that disturbance (not among `existing`).
 std::vector<Candidate> places_with_dominant(const Problem& problem,

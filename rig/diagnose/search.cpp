@@ -248,8 +248,22 @@ std::vector<HypothesisFit> search_hypotheses(const Problem& pr, const Location& 
   // Input tests passed: the pairs with the disturbance are the only ones.
   if (auto behind = behind_disturbance(pr, loc, hs, base, o); !behind.empty())
     return done(std::move(behind));
-  if (!o.try_pairs || hs.empty() ||
-      (explains(pr, hs.front(), loc) && !leaves_play(hs.front(), loc)))
+  if (!o.try_pairs || hs.empty()) return done({});
+  // Pairs are searched unless the best single and the best that could be a verdict both
+  // explain the residual, and no stand-in (a fit no verdict can name, verdict.cpp
+  // could_be_verdict) scores a pair's margin above the latter. A stand-in that explains says
+  // nothing of whether the credible shape needs a second effect, and one ahead by that much
+  // shows it may (a resonance at its damping bound for a damping change beside a
+  // transducer's lag, gensim g075).
+  const auto best = std::find_if(hs.begin(), hs.end(), [&](const HypothesisFit& h) {
+    return could_be_verdict(h, loc, pr.scales);
+  });
+  const auto settles = [&](const HypothesisFit& h) {
+    return explains(pr, h, loc) && !leaves_play(h, loc);
+  };
+  const bool stand_in_ahead =
+      best != hs.end() && hs.front().score >= best->score + thresholds::kNestedMarginPct;
+  if (settles(hs.front()) && (best == hs.end() || settles(*best)) && !stand_in_ahead)
     return done({});
   const std::vector<Candidate> paired = pair_candidates(pr, hs);
   std::vector<HypothesisFit> pairs = fit_all(pr, paired, base, o);
@@ -267,6 +281,8 @@ std::vector<HypothesisFit> search_hypotheses(const Problem& pr, const Location& 
        screen_and_refine(pr, places_with_dominant(pr, hs, tried), base, o, kRefinedDominantPlaces))
     pairs.push_back(std::move(h));
   for (auto& h : gated_with_disturbances(pr, hs, base, o)) pairs.push_back(std::move(h));
+  // Credible places first: their pairs may hold an effect that generalises a simpler one.
+  for (auto& h : fit_all(pr, credible_pairs(hs, pairs), base, o)) pairs.push_back(std::move(h));
   std::vector<const HypothesisFit*> fitted_pairs;
   for (const auto& h : pairs) fitted_pairs.push_back(&h);
   for (auto& h : fit_all(pr, simpler_pairs(hs, fitted_pairs), base, o))

@@ -39,17 +39,30 @@ bool credible(const HypothesisFit& h, const DataScales& scales) {
 
 // A pair of two input-side effects contains each of them alone: it must beat the better by
 // the nested margin (thresholds.hpp), or the second effect has bought only fitting noise.
-bool pair_adds(const std::vector<HypothesisFit>& hs, const HypothesisFit& h) {
+// Each alone counts at the pair's own place and at any place where it is credible (a lag is
+// a lag at the input or in the loop, under either word): a pair refitted with an effect moved
+// to a place where its single is weak would otherwise pass on a little over the effect at its
+// own place (droopsim seed 3 d002: a late fuel delay as a damping change beside a short lag at
+// the input, 0.1 points over the lag inside the loop).
+bool pair_adds(const std::vector<HypothesisFit>& hs, const HypothesisFit& h,
+               const DataScales& scales) {
   if (h.effects.size() != 2 || std::any_of(h.effects.begin(), h.effects.end(), [](const auto& e) {
         return kind_of(e.effect) == EffectKind::kDisturbance;
       }))
     return true;
+  const auto same_model = [](Effect a, Effect b) {
+    const auto lag = [](Effect e) { return e == Effect::kExtraLag || e == Effect::kSensorLag; };
+    return a == b || (lag(a) && lag(b));
+  };
   double best = -1e300;
-  for (const auto& g : hs)
-    if (g.effects.size() == 1)
-      for (const auto& e : h.effects)
-        if (g.effects[0].effect == e.effect && g.effects[0].place == e.place)
-          best = std::max(best, g.score);
+  for (const auto& g : hs) {
+    if (g.effects.size() != 1) continue;
+    const AppliedEffect& s = g.effects[0];
+    for (const auto& e : h.effects)
+      if ((s.effect == e.effect && s.place == e.place) ||
+          (same_model(s.effect, e.effect) && credible(g, scales)))
+        best = std::max(best, g.score);
+  }
   return h.score - best >= kNestedMarginPct;
 }
 
@@ -97,7 +110,7 @@ int choose_raw(const DiagnoseResult& r, double min_gain, Only only = Only::kAny)
         (only == Only::kDirection && !has_direction_effect(h)))
       continue;
     if (!direction_evidenced(h, r.location) || !credible(h, r.problem.scales) ||
-        !pair_adds(r.hypotheses, h))
+        !pair_adds(r.hypotheses, h, r.problem.scales))
       continue;
     if (immaterial_drift(h, r.problem) || sampling_convention_only(h, r.problem)) continue;
     if (unseen && has_input_side(h) &&
@@ -272,7 +285,8 @@ int account_for_gain_peak(const DiagnoseResult& r, int i, double min_gain) {
     // linear shape.
     return static_cast<int>(j) != i && !g.screened_only && has_input_side(g) &&
            !(has_nonlinearity(g) && !has_nonlinearity(chosen)) &&
-           could_be_verdict(g, r.location, r.problem.scales) && pair_adds(r.hypotheses, g);
+           could_be_verdict(g, r.location, r.problem.scales) &&
+           pair_adds(r.hypotheses, g, r.problem.scales);
   };
   const double floor = std::max(min_gain, chosen.score - kNonlinearOverLinearPct);
   for (std::size_t j = 0; j < r.hypotheses.size() && r.hypotheses[j].score >= floor; ++j)
@@ -310,7 +324,8 @@ int prefer_delay_to_lag(const DiagnoseResult& r, int i, double min_gain) {
     if (!match) continue;
     const bool named = g.score >= std::max(min_gain, h.score - kLagOverDelayMarginPct) &&
                        could_be_verdict(g, r.location, r.problem.scales) &&
-                       !sampling_convention_only(g, r.problem) && pair_adds(r.hypotheses, g);
+                       !sampling_convention_only(g, r.problem) &&
+                       pair_adds(r.hypotheses, g, r.problem.scales);
     return named ? static_cast<int>(j) : i;
   }
   return i;
@@ -404,7 +419,7 @@ int explains_below_min_gain(const DiagnoseResult& r) {
     if (!has_input_side(h) ||
         !(h.score - disturbance_part_score(r.hypotheses, h) > kExplainedBelowMinGainPct) ||
         !direction_evidenced(h, r.location) || !credible(h, r.problem.scales) ||
-        !pair_adds(r.hypotheses, h) || immaterial_drift(h, r.problem) ||
+        !pair_adds(r.hypotheses, h, r.problem.scales) || immaterial_drift(h, r.problem) ||
         sampling_convention_only(h, r.problem))
       continue;
     // A nonlinearity without the level's or the direction's evidence needs a margin over the

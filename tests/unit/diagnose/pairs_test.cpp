@@ -9,6 +9,7 @@
 
 #include "records.hpp"
 #include "rig/diagnose/augmented_model.hpp"
+#include "rig/diagnose/placement.hpp"
 #include "rig/diagnose/screen.hpp"
 #include "rig/diagnose/split.hpp"
 
@@ -43,6 +44,35 @@ TEST(Pairs, ASimplerPairIsFormedOnlyWhereBothEffectsCanSit) {
   EXPECT_EQ(start[0].effect, Effect::kBacklash);
   EXPECT_EQ(start[0].place, Place::kInput);
   EXPECT_EQ(start[1].effect, Effect::kStaticNonlinearity);
+}
+
+// A pair whose lag inside the governor's loop stopped at its feedback's bound, which no
+// verdict names, is refitted with the lag at its best credible single place beside the same
+// damping change, in the pair's order (gensim seed 7 g075); a pair already fitted, or one
+// whose places are credible, is not formed again.
+TEST(Pairs, APairAtABoundIsRefittedWithThatEffectAtItsCrediblePlace) {
+  const AppliedEffect lag_at_bound{
+      Effect::kExtraLag, {0.05}, Place::kGovernorLoop, {2.0, 0.5, 0.5}};
+  const AppliedEffect lag_in_loop{Effect::kExtraLag, {0.1}, Place::kGovernorLoop, {1.7, 0.0, 0.1}};
+  const AppliedEffect lag_at_input{Effect::kExtraLag, {0.15}, Place::kInput, {}};
+  const AppliedEffect damping{Effect::kLoadDamping, {0.4}, Place::kInput, {}};
+  ASSERT_FALSE(place_credible(lag_at_bound));
+  ASSERT_TRUE(place_credible(lag_in_loop));
+  const std::vector<HypothesisFit> singles{fit_of({lag_in_loop}, 43.0),
+                                           fit_of({lag_at_input}, 41.0), fit_of({damping}, 40.0)};
+  const std::vector<HypothesisFit> pairs{fit_of({lag_at_bound, damping}, 47.0)};
+  const std::vector<Candidate> formed = credible_pairs(singles, pairs);
+  ASSERT_EQ(formed.size(), 1u);
+  const auto& start = formed.front().front();
+  ASSERT_EQ(start.size(), 2u);
+  EXPECT_EQ(start[0].effect, Effect::kExtraLag);     // the other credible place of the lag ...
+  EXPECT_EQ(start[0].place, Place::kInput);          // (the loop is where it stopped)
+  EXPECT_EQ(start[1].effect, Effect::kLoadDamping);  // ... beside the same damping change
+
+  std::vector<HypothesisFit> with_it = pairs;
+  with_it.push_back(fit_of({damping, lag_at_input}, 46.0));
+  EXPECT_TRUE(credible_pairs(singles, with_it).empty());  // fitted already, either order
+  EXPECT_TRUE(credible_pairs(singles, {fit_of({lag_in_loop, damping}, 47.0)}).empty());
 }
 
 // Two effects in the error loop make no model (augmented_model.hpp): fitted on the worker
