@@ -829,5 +829,41 @@ TEST(Verdict, APlayIsNotNamedOverALagThatFitsBetterAtItsPlacesBound) {
   EXPECT_EQ(choice(1.2, 17.63), "extra_lag");     // credible: named where it fits
 }
 
+// A pair must beat each of its effects alone wherever that single is credible, not only at
+// the pair's own places: droopsim seed 3 d002, a late fuel delay, fitted as a damping change
+// beside a 13 ms lag at the input (the pair refitted with the lag at its credible place),
+// passed on 0.1 points over the lag alone in the governor's loop.
+TEST(Verdict, APairIsNotNamedOnItsMovedEffectsWeakSingle) {
+  DiagnoseResult r;
+  r.problem.y = white(1000, 10.0, 31);
+  r.problem.dt_s = 0.02;
+  r.problem.scales.z_std = 10.0;
+  r.location.input_mismatch = true;
+  const auto fit = [](std::vector<AppliedEffect> effects, double score) {
+    HypothesisFit h;
+    h.effects = std::move(effects);
+    h.score = score;
+    h.validation_fit_before = 76.3;
+    h.validation_fit_after = 76.3 + score;
+    return h;
+  };
+  const AppliedEffect lag_in_loop{
+      Effect::kExtraLag, {0.0222}, Place::kGovernorLoop, {0.088, 0.077, 0.005}};
+  const AppliedEffect lag_at_input{Effect::kExtraLag, {0.013}, Place::kInput, {}};
+  const AppliedEffect damping{Effect::kLoadDamping, {0.103}, Place::kInput, {}};
+  r.hypotheses = {fit({damping, lag_at_input}, 9.209), fit({lag_in_loop}, 9.112),
+                  fit({lag_at_input}, 7.5), fit({damping}, 6.0)};
+  EXPECT_EQ(choose(r, thresholds::kMinGainPct), 1);
+  // Ahead of the lag in the loop by the nested margin, the pair adds the damping change.
+  r.hypotheses[0].score = 9.112 + thresholds::kNestedMarginPct + 0.01;
+  EXPECT_EQ(choose(r, thresholds::kMinGainPct), 0);
+  // The lag in the loop with its feedback's static share at the bound is no credible single
+  // to compare with: the pair beats the lag and the damping change at the input.
+  r.hypotheses[0].score = 9.209;
+  r.hypotheses[1].effects[0].place_params = {1.99, 0.077, 0.005};
+  ASSERT_FALSE(place_credible(r.hypotheses[1].effects[0]));
+  EXPECT_EQ(choose(r, thresholds::kMinGainPct), 0);
+}
+
 }  // namespace
 }  // namespace rig::diagnose
