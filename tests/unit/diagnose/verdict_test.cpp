@@ -42,6 +42,28 @@ Eigen::VectorXd wander(const Eigen::VectorXd& z, double times, std::uint64_t see
   return drift * (times * rms(z) / rms(drift));
 }
 
+// A result whose input tests fired, for the verdict alone: a white output of rms 10 from
+// `seed` and the response's scale.
+DiagnoseResult input_mismatch_result(std::uint64_t seed, double z_std, double dt_s = 0.01) {
+  DiagnoseResult r;
+  r.problem.y = white(1000, 10.0, seed);
+  r.problem.dt_s = dt_s;
+  r.problem.scales.z_std = z_std;
+  r.location.input_mismatch = true;
+  return r;
+}
+
+// A fitted hypothesis as the search ranks it: its effects, its score and the validation fit
+// before and after (the score on top of the fit before).
+HypothesisFit scored(std::vector<AppliedEffect> effects, double score, double fit_before_pct) {
+  HypothesisFit h;
+  h.effects = std::move(effects);
+  h.score = score;
+  h.validation_fit_before = fit_before_pct;
+  h.validation_fit_after = fit_before_pct + score;
+  return h;
+}
+
 TEST(Verdict, APeakAtItsDampingBoundIsNoEvidenceOfAMode) {
   const auto credible = effect_model(Effect::kResonance).credible;
   ASSERT_NE(credible, nullptr);
@@ -268,19 +290,11 @@ TEST(Verdict, ADriftTheFitShowsClearlyIsMaterialWithinTheTransducersAccuracy) {
 // seed 1 d081, a null: the sign test fired on the fuel map's own curvature, and a friction
 // of 0.004 beside the wander, 0.21 points under the wander alone, was named).
 TEST(Verdict, AnEffectThatAddsNothingBesideAnImmaterialDriftIsNotNamed) {
-  DiagnoseResult r;
-  r.problem.y = white(1000, 10.0, 29);
+  DiagnoseResult r = input_mismatch_result(29, 12.0);
   r.problem.y_level = 1750.0;
-  r.problem.scales.z_std = 12.0;
-  r.location.input_mismatch = true;
   const AppliedEffect drift{Effect::kDrift, {5.0}, Place::kInput, {}};
   const auto hypothesis = [](std::vector<AppliedEffect> effects, double score) {
-    HypothesisFit h;
-    h.effects = std::move(effects);
-    h.score = score;
-    h.validation_fit_before = 82.9;
-    h.validation_fit_after = 82.9 + score;
-    return h;
+    return scored(std::move(effects), score, 82.9);
   };
   r.hypotheses = {
       hypothesis({drift}, 2.77),
@@ -473,12 +487,7 @@ TEST(Verdict, ALevelStepThatTheDynamicsGainMatchesIsAGainChange) {
   r.problem.scales.z_std = 10.0;
   r.location.input_mismatch = true;
   const auto hypothesis = [](std::vector<AppliedEffect> effects, double score) {
-    HypothesisFit h;
-    h.effects = std::move(effects);
-    h.score = score;
-    h.validation_fit_before = 60.0;
-    h.validation_fit_after = 60.0 + score;
-    return h;
+    return scored(std::move(effects), score, 60.0);
   };
   const AppliedEffect drift{Effect::kDrift, {5.0}, Place::kInput, {}};
   r.hypotheses = {hypothesis({drift}, 13.08),
@@ -834,25 +843,15 @@ TEST(Verdict, APlayIsNotNamedOverALagThatFitsBetterAtItsPlacesBound) {
 // beside a 13 ms lag at the input (the pair refitted with the lag at its credible place),
 // passed on 0.1 points over the lag alone in the governor's loop.
 TEST(Verdict, APairIsNotNamedOnItsMovedEffectsWeakSingle) {
-  DiagnoseResult r;
-  r.problem.y = white(1000, 10.0, 31);
-  r.problem.dt_s = 0.02;
-  r.problem.scales.z_std = 10.0;
-  r.location.input_mismatch = true;
-  const auto fit = [](std::vector<AppliedEffect> effects, double score) {
-    HypothesisFit h;
-    h.effects = std::move(effects);
-    h.score = score;
-    h.validation_fit_before = 76.3;
-    h.validation_fit_after = 76.3 + score;
-    return h;
-  };
+  DiagnoseResult r = input_mismatch_result(31, 10.0, 0.02);
   const AppliedEffect lag_in_loop{
       Effect::kExtraLag, {0.0222}, Place::kGovernorLoop, {0.088, 0.077, 0.005}};
   const AppliedEffect lag_at_input{Effect::kExtraLag, {0.013}, Place::kInput, {}};
   const AppliedEffect damping{Effect::kLoadDamping, {0.103}, Place::kInput, {}};
-  r.hypotheses = {fit({damping, lag_at_input}, 9.209), fit({lag_in_loop}, 9.112),
-                  fit({lag_at_input}, 7.5), fit({damping}, 6.0)};
+  const double before_pct = 76.3;
+  r.hypotheses = {scored({damping, lag_at_input}, 9.209, before_pct),
+                  scored({lag_in_loop}, 9.112, before_pct), scored({lag_at_input}, 7.5, before_pct),
+                  scored({damping}, 6.0, before_pct)};
   EXPECT_EQ(choose(r, thresholds::kMinGainPct), 1);
   // Ahead of the lag in the loop by the nested margin, the pair adds the damping change.
   r.hypotheses[0].score = 9.112 + thresholds::kNestedMarginPct + 0.01;
