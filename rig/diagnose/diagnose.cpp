@@ -118,7 +118,8 @@ DiagnoseResult diagnose(const DiagnoseInput& in, const DiagnoseOptions& o) {
   }
   if (r.chosen_index >= 0) keep_pair_estimate(r, base.yhat, o);
   // The rule's own conditions, again on the hypothesis as refitted.
-  if (r.explained_below_min_gain && !(r.chosen()->score > thresholds::kExplainedBelowMinGainPct &&
+  if (r.explained_below_min_gain &&
+      !(score_below_min_gain(r, *r.chosen()) > thresholds::kExplainedBelowMinGainPct &&
                                       explains(pr, *r.chosen(), r.location)))
     r.chosen_index = -1, r.explained_below_min_gain = false;
   // Nothing the input tests found, and nothing worth its parameters (a disturbance alone, a

@@ -428,7 +428,13 @@ std::string explain(const DiagnoseResult& r) {
         pair->score, h->score);
   if (!r.location.input_mismatch && r.location.clip.side == 0 && !has_input_side(*h))
     s += unseen_input_words(r);
-  if (r.explained_below_min_gain)
+  if (r.explained_below_min_gain && score_below_min_gain(r, *h) != h->score)
+    s += fmt::format(
+        " It scores {:.2f}, under the {:.1f} asked, but the level's step fixed its value: the "
+        "gain costs the fit no parameter, and the fit rises. Its residual is no longer "
+        "correlated with the input.",
+        h->score, thresholds::kMinGainPct);
+  else if (r.explained_below_min_gain)
     s += fmt::format(
         " It scores {:.2f}, under the {:.1f} asked, but its residual is no longer correlated "
         "with the input: the rest of the residual, which the fit's points are measured "

@@ -46,6 +46,27 @@ Ls least_squares(const Eigen::MatrixXd& x, const Eigen::VectorXd& r) {
   return out;
 }
 
+Eigen::VectorXd ar_whitener(const Eigen::VectorXd& e, int order) {
+  const Eigen::Index n = e.size(), p = order;
+  Eigen::VectorXd a = Eigen::VectorXd::Ones(1);
+  if (p < 1 || n < 8 * p || !(e.squaredNorm() > 0.0)) return a;
+  Eigen::MatrixXd x(n - p, p);
+  for (Eigen::Index j = 0; j < p; ++j) x.col(j) = e.segment(p - 1 - j, n - p);
+  const Ls fit = least_squares(x, e.tail(n - p));  // e(k) = sum_j phi_j e(k - j) + w(k)
+  a.resize(p + 1);
+  a(0) = 1.0;
+  a.tail(p) = -fit.beta;
+  return a;
+}
+
+Eigen::VectorXd whiten(const Eigen::VectorXd& x, const Eigen::VectorXd& a) {
+  const Eigen::Index n = x.size(), p = a.size() - 1;
+  if (n <= p) return Eigen::VectorXd();
+  Eigen::VectorXd w = Eigen::VectorXd::Zero(n - p);
+  for (Eigen::Index j = 0; j <= p; ++j) w += a(j) * x.segment(p - j, n - p);
+  return w;
+}
+
 Eigen::VectorXd detrend(const Problem& pr, const Eigen::VectorXd& x) {
   return x - smooth_zero_phase(x, drift_smooth_s(pr), pr.dt_s);
 }

@@ -27,6 +27,12 @@ struct Ls {
 };
 Ls least_squares(const Eigen::MatrixXd& x, const Eigen::VectorXd& r);
 
+// The whitening filter A(q) = 1 + a_1 q^-1 + ... + a_p q^-p of an AR(p) fitted to e by least
+// squares (a = [1, a_1, ..., a_p]); [1] when e is too short or flat.
+Eigen::VectorXd ar_whitener(const Eigen::VectorXd& e, int order);
+// x filtered by A(q), its first p samples dropped (they have no full history).
+Eigen::VectorXd whiten(const Eigen::VectorXd& x, const Eigen::VectorXd& a);
+
 // Slow content (below the drift test's time scale) removed: a drift must not project onto
 // regressors that carry a mean, such as G(u 1{u >= 0}).
 Eigen::VectorXd detrend(const Problem& pr, const Eigen::VectorXd& x);

@@ -332,6 +332,9 @@ inline constexpr double kGridEventSpreads = 6.0;
 // The step-gain test (locate.hpp StepGain): the gain after a level step differs from before
 // it by more than this many standard deviations (the sign and direction tests' bound) ...
 inline constexpr double kStepGainZ = 5.0;
+// The step-gain fit whitens the residual by an AR model of this order: 0.2 s at 100 Hz, the
+// span of the colour a transducer's lag and a grid's wander leave in it.
+inline constexpr int kStepGainWhitenOrder = 20;
 // ... and by what the level's step implies, within this many (a 99.7 % interval).
 inline constexpr double kStepGainAgreeSds = 3.0;
 // The test fires when the change agrees with the level's and the level's reading is at least

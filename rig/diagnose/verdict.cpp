@@ -411,13 +411,23 @@ std::string verdict_of(const HypothesisFit& h) {
 // disturbance may dominate (a grid's wander); the input tests' finding is then explained
 // all the same (a transducer's 8 % gain error on a 600 s gensim record: 0.4 points, the
 // residual's correlation with the input 5 times its bound before, within it after).
+// A gain change alone, when the step-gain test fired (locate_step_gain): the level's step
+// fixed its value, so the gain's parameter costs the fit nothing (a point hypothesis, weighed
+// by the test's likelihood ratio). Its score here is the validation fit's rise.
+double score_below_min_gain(const DiagnoseResult& r, const HypothesisFit& h) {
+  const bool level_fixed_gain = r.location.step_gain.fires && h.effects.size() == 1 &&
+                                h.effects[0].effect == Effect::kGainChange;
+  return level_fixed_gain ? h.validation_fit_after - h.validation_fit_before : h.score;
+}
+
 int explains_below_min_gain(const DiagnoseResult& r) {
   if (!r.location.input_mismatch || r.chosen_index >= 0) return -1;
-  for (std::size_t i = 0; i < r.hypotheses.size(); ++i) {
+  for (std::size_t i = 0; i < r.hypotheses.size(); ++i) {  // ranked
     const auto& h = r.hypotheses[i];
-    if (!(h.score > kExplainedBelowMinGainPct)) break;
+    if (!(score_below_min_gain(r, h) > kExplainedBelowMinGainPct)) continue;
     if (!has_input_side(h) ||
-        !(h.score - disturbance_part_score(r.hypotheses, h) > kExplainedBelowMinGainPct) ||
+        !(score_below_min_gain(r, h) - disturbance_part_score(r.hypotheses, h) >
+          kExplainedBelowMinGainPct) ||
         !direction_evidenced(h, r.location) || !credible(h, r.problem.scales) ||
         !pair_adds(r.hypotheses, h, r.problem.scales) || immaterial_drift(h, r.problem) ||
         sampling_convention_only(h, r.problem))

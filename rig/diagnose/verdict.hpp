@@ -51,6 +51,9 @@ bool map_of_the_move(const DiagnoseResult& r);
 // -1 for none, also when that best one is not or does not. choose()'s later preferences (the
 // simpler effect, the delay over the lag, an immaterial drift set aside) are not applied.
 int explains_below_min_gain(const DiagnoseResult& r);
+// The score that rule weighs h by: its score, or for a gain change alone when the step-gain
+// test fired (its value fixed by the level's step) the validation fit's rise.
+double score_below_min_gain(const DiagnoseResult& r, const HypothesisFit& h);
 
 // The verdict word of a chosen hypothesis.
 std::string verdict_of(const HypothesisFit& h);

@@ -435,6 +435,39 @@ TEST(Verdict, UnderTheMinimumGainALinearEffectThatExplainsTheInputTestsIsNamed) 
   EXPECT_EQ(explains_below_min_gain(r), -1);
 }
 
+// A gain change the step-gain test fired on has its value fixed by the level's step: it is
+// named when it raises the validation fit at all, its parameter unpaid (gensim seed 7 g019,
+// a transducer gain 0.920 from 60 s: the fit rises 0.25 points, the score is -0.003).
+TEST(Verdict, AGainTheLevelStepFixedIsNamedWhenItRaisesTheFitAtAll) {
+  DiagnoseResult r;
+  r.problem.dt_s = 0.01;
+  r.problem.u = white(2000, 1.0, 41);
+  r.problem.y = white(2000, 10.0, 43);
+  r.problem.est_weight = Eigen::VectorXd::Ones(2000);
+  r.problem.val_weight = Eigen::VectorXd::Ones(2000);
+  r.problem.scales.z_std = 12.0;
+  r.location.input_mismatch = true;
+  r.location.tests.auto_corr = Eigen::VectorXd::Zero(21);
+  HypothesisFit gain;
+  gain.effects = {{Effect::kGainChange, {0.954}, Place::kInput, {}}};
+  gain.validation_fit_before = 67.78;
+  gain.validation_fit_after = 68.03;
+  gain.score = gain.validation_fit_after - gain.validation_fit_before -
+               thresholds::kPenaltyPctPerParameter;
+  gain.yhat = Eigen::VectorXd::Zero(2000);
+  r.hypotheses = {gain};
+  EXPECT_EQ(explains_below_min_gain(r), -1);  // the test did not fire: the parameter is paid
+  r.location.step_gain.fires = true;
+  EXPECT_EQ(explains_below_min_gain(r), 0);
+  // A fit that does not rise is not named, fixed or not.
+  r.hypotheses[0].validation_fit_after = r.hypotheses[0].validation_fit_before - 0.01;
+  EXPECT_EQ(explains_below_min_gain(r), -1);
+  // Nor is any other effect freed of its parameters' cost.
+  r.hypotheses[0] = gain;
+  r.hypotheses[0].effects = {{Effect::kExtraLag, {0.05}, Place::kInput, {}}};
+  EXPECT_EQ(explains_below_min_gain(r), -1);
+}
+
 // A static map from an onset: the level test on its own span waives the nonlinear margin
 // where the whole record's is diluted (docs/diagnose.md step 4; droopsim seed 7 d032, a
 // deadband from 100 s). Here the whole record's evidence is taken away, and the response to
