@@ -1,6 +1,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "rig/diagnose/screen.hpp"
 #include "rig/diagnose/split.hpp"
 
 namespace rig::diagnose {
@@ -151,6 +152,27 @@ void refine_onsets(const Problem& pr, std::vector<HypothesisFit>& hs, const Eige
     if (g.score > h.score) h = std::move(g);
   }
   refit_gain_from_step(pr, hs, base, fit);
+}
+
+void refine_onsets_beside(const Problem& pr, std::vector<HypothesisFit>& pairs,
+                          const HypothesisFit& disturbance, const Eigen::VectorXd& base,
+                          const FitOptions& fit) {
+  if (pr.active_from > 0 || pr.active_to < pr.y.size() ||
+      disturbance.yhat.size() != pr.y.size())
+    return;
+  const int n = std::min<int>(kOnsetHypotheses, static_cast<int>(pairs.size()));
+  for (int i = 0; i < n; ++i) {
+    HypothesisFit& h = pairs[static_cast<std::size_t>(i)];
+    if (h.yhat.size() != pr.y.size() || !(h.score > disturbance.score)) continue;
+    const ChangePoint cp = change_point(pr, disturbance.yhat, h.yhat);
+    if (!cp.found) continue;
+    Problem gated = pr;
+    gated.active_from = cp.from;
+    gated.active_to = cp.to;
+    HypothesisFit g = fit_hypothesis(gated, {h.effects}, base, fit);
+    if (g.score > h.score) h = std::move(g);
+  }
+  rank(pairs);
 }
 
 }  // namespace rig::diagnose

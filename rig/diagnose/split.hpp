@@ -26,6 +26,14 @@ void gate_to_windows(Problem& problem, const Location& location);
 void refine_onsets(const Problem& problem, std::vector<HypothesisFit>& hypotheses,
                    const Eigen::VectorXd& baseline_yhat, const FitOptions& fit);
 
+// The same for pairs of an input-side effect with a disturbance found behind it
+// (search.cpp behind_disturbance): the gain per window is the pair's over the disturbance
+// alone (its fit `disturbance`), so that the drift's share does not hide the effect's onset;
+// the refit gates the input-side effect only. Top three only; ranked again.
+void refine_onsets_beside(const Problem& problem, std::vector<HypothesisFit>& pairs,
+                          const HypothesisFit& disturbance, const Eigen::VectorXd& baseline_yhat,
+                          const FitOptions& fit);
+
 // An abrupt step of the recorded level (a transducer re-ranged, a gain that changed with the
 // operating point in it, a load step): the difference of the residual's means over the
 // windows W = max(2 s, 100 samples) after and before each candidate sample k,
