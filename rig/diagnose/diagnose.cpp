@@ -120,7 +120,7 @@ DiagnoseResult diagnose(const DiagnoseInput& in, const DiagnoseOptions& o) {
   // The rule's own conditions, again on the hypothesis as refitted.
   if (r.explained_below_min_gain &&
       !(score_below_min_gain(r, *r.chosen()) > thresholds::kExplainedBelowMinGainPct &&
-                                      explains(pr, *r.chosen(), r.location)))
+        explains(pr, *r.chosen(), r.location)))
     r.chosen_index = -1, r.explained_below_min_gain = false;
   // Nothing the input tests found, and nothing worth its parameters (a disturbance alone, a
   // clip, the blind search's best): not material.

@@ -157,8 +157,7 @@ void refine_onsets(const Problem& pr, std::vector<HypothesisFit>& hs, const Eige
 void refine_onsets_beside(const Problem& pr, std::vector<HypothesisFit>& pairs,
                           const HypothesisFit& disturbance, const Eigen::VectorXd& base,
                           const FitOptions& fit) {
-  if (pr.active_from > 0 || pr.active_to < pr.y.size() ||
-      disturbance.yhat.size() != pr.y.size())
+  if (pr.active_from > 0 || pr.active_to < pr.y.size() || disturbance.yhat.size() != pr.y.size())
     return;
   const int n = std::min<int>(kOnsetHypotheses, static_cast<int>(pairs.size()));
   for (int i = 0; i < n; ++i) {

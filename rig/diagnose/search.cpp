@@ -150,7 +150,8 @@ std::vector<HypothesisFit> behind_disturbance(const Problem& pr, const Location&
       cands.push_back(std::move(paired));
     }
   }
-  std::vector<HypothesisFit> pairs = screen_and_refine(pr, cands, base, o, kRefinedBehindDisturbance);
+  std::vector<HypothesisFit> pairs =
+      screen_and_refine(pr, cands, base, o, kRefinedBehindDisturbance);
   refine_onsets_beside(pr, pairs, *dist, base, o.fit);
   return pairs;
 }

@@ -452,8 +452,8 @@ TEST(Verdict, AGainTheLevelStepFixedIsNamedWhenItRaisesTheFitAtAll) {
   gain.effects = {{Effect::kGainChange, {0.954}, Place::kInput, {}}};
   gain.validation_fit_before = 67.78;
   gain.validation_fit_after = 68.03;
-  gain.score = gain.validation_fit_after - gain.validation_fit_before -
-               thresholds::kPenaltyPctPerParameter;
+  gain.score =
+      gain.validation_fit_after - gain.validation_fit_before - thresholds::kPenaltyPctPerParameter;
   gain.yhat = Eigen::VectorXd::Zero(2000);
   r.hypotheses = {gain};
   EXPECT_EQ(explains_below_min_gain(r), -1);  // the test did not fire: the parameter is paid
