@@ -192,6 +192,41 @@ TEST(Locate, TheStepGainTestWeighsTheLevelsReadingAgainstNoChange) {
   EXPECT_EQ(fired(-3.5, 3.5), 0);
 }
 
+// The same on coloured noise (white through a one-pole low-pass at 0.9 per sample, as a
+// transducer's lag or the grid's wander colour the residual): with the test's generalised
+// least squares (an AR whitener of its first fit's residual) operating-point steps still fire
+// in few draws and a gain change of 3.5 of its sd in most.
+TEST(Locate, TheStepGainTestKeepsItsSizeOnColouredNoise) {
+  int blocks = 0;
+  Eigen::Index warm = 0;
+  Problem pr = prepare_problem(test::null_record(73), &blocks, &warm);
+  const Eigen::VectorXd yh = model_output(pr, {}).yhat;
+  const Eigen::Index n = yh.size(), half = n / 2;
+  pr.level_step_removed_at = half;
+  const auto coloured = [&](std::uint64_t seed) {
+    Eigen::VectorXd w = test::white(n, 0.3 * test::rms(yh), seed);
+    for (Eigen::Index k = 1; k < n; ++k) w(k) += 0.9 * w(k - 1);
+    return w;
+  };
+  const double sd = locate_step_gain(pr, coloured(1), yh, 1.0).sd;
+  ASSERT_GT(sd, 0.0);
+  constexpr int kDraws = 300;
+  const auto fired = [&](double d_gain, double d_level) {
+    int count = 0;
+    for (int i = 0; i < kDraws; ++i) {
+      Eigen::VectorXd r = coloured(2000 + static_cast<std::uint64_t>(i));
+      r.tail(n - half) -= d_gain * sd * yh.tail(n - half);
+      count += locate_step_gain(pr, r, yh, 1.0 - d_level * sd).fires ? 1 : 0;
+    }
+    std::printf("coloured: gain %.2f sd, level %.2f sd (sd %.4f): fired in %d of %d draws\n",
+                d_gain, d_level, sd, count, kDraws);
+    return count;
+  };
+  EXPECT_GE(fired(3.5, 3.5), kDraws * 70 / 100);
+  EXPECT_LE(fired(0.0, 2.15), 12);
+  EXPECT_LE(fired(0.0, 3.5), 12);
+}
+
 // The value of y below which a fraction q of its samples lie.
 double quantile(const Eigen::VectorXd& y, double q) {
   std::vector<double> v(y.data(), y.data() + y.size());
