@@ -66,6 +66,17 @@ ChangePoint change_point(const Problem& pr, const Eigen::VectorXd& base,
   return cp;
 }
 
+// h refitted on the change point's span when one was found, kept when its score rises.
+void refit_from(const Problem& pr, const ChangePoint& cp, HypothesisFit& h,
+                const Eigen::VectorXd& base, const FitOptions& fit) {
+  if (!cp.found) return;
+  Problem gated = pr;
+  gated.active_from = cp.from;
+  gated.active_to = cp.to;
+  HypothesisFit g = fit_hypothesis(gated, {h.effects}, base, fit);
+  if (g.score > h.score) h = std::move(g);
+}
+
 }  // namespace
 
 Eigen::Index find_level_shift(const Problem& pr, const Eigen::VectorXd& r, double spreads) {
@@ -143,13 +154,7 @@ void refine_onsets(const Problem& pr, std::vector<HypothesisFit>& hs, const Eige
         h.effects.front().effect == Effect::kCurvature)
       continue;
     ++tried;
-    const ChangePoint cp = change_point(pr, base, h.yhat);
-    if (!cp.found) continue;
-    Problem gated = pr;
-    gated.active_from = cp.from;
-    gated.active_to = cp.to;
-    HypothesisFit g = fit_hypothesis(gated, {h.effects}, base, fit);
-    if (g.score > h.score) h = std::move(g);
+    refit_from(pr, change_point(pr, base, h.yhat), h, base, fit);
   }
   refit_gain_from_step(pr, hs, base, fit);
 }
@@ -163,13 +168,7 @@ void refine_onsets_beside(const Problem& pr, std::vector<HypothesisFit>& pairs,
   for (int i = 0; i < n; ++i) {
     HypothesisFit& h = pairs[static_cast<std::size_t>(i)];
     if (h.yhat.size() != pr.y.size() || !(h.score > disturbance.score)) continue;
-    const ChangePoint cp = change_point(pr, disturbance.yhat, h.yhat);
-    if (!cp.found) continue;
-    Problem gated = pr;
-    gated.active_from = cp.from;
-    gated.active_to = cp.to;
-    HypothesisFit g = fit_hypothesis(gated, {h.effects}, base, fit);
-    if (g.score > h.score) h = std::move(g);
+    refit_from(pr, change_point(pr, disturbance.yhat, h.yhat), h, base, fit);
   }
   rank(pairs);
 }

@@ -152,18 +152,32 @@ TEST(Locate, TheResponseTellsAGainChangeFromAnOperatingPointStep) {
   }
 }
 
+// A null record with a level step taken out half-way, and the baseline's output: the
+// step-gain test's setting.
+struct StepRecord {
+  StepRecord() {
+    int blocks = 0;
+    Eigen::Index warm = 0;
+    pr = prepare_problem(test::null_record(73), &blocks, &warm);
+    yh = model_output(pr, {}).yhat;
+    half = yh.size() / 2;
+    pr.level_step_removed_at = half;
+  }
+  Problem pr;
+  Eigen::VectorXd yh;
+  Eigen::Index half = 0;
+};
+
 // The step-gain test weighs the two readings of a level step (thresholds.hpp,
 // kStepGainLikelihoodRatio), on 300 seeded noise draws each: a gain change 3.5 sd of its own
 // test from none (|z| mostly under the old bound of 5) fires in most draws, and an
 // operating-point step leaves the gain as it was and fires in few, also at the step size
 // (2.15 sd) where that is likeliest.
 TEST(Locate, TheStepGainTestWeighsTheLevelsReadingAgainstNoChange) {
-  int blocks = 0;
-  Eigen::Index warm = 0;
-  Problem pr = prepare_problem(test::null_record(73), &blocks, &warm);
-  const Eigen::VectorXd yh = model_output(pr, {}).yhat;
-  const Eigen::Index n = yh.size(), half = n / 2;
-  pr.level_step_removed_at = half;
+  StepRecord rec;
+  Problem& pr = rec.pr;
+  const Eigen::VectorXd& yh = rec.yh;
+  const Eigen::Index n = yh.size(), half = rec.half;
   const double noise = 0.3 * test::rms(yh);
   // The test's own sd at this noise (it does not depend on the level's ratio).
   const double sd = locate_step_gain(pr, test::white(n, noise, 1), yh, 1.0).sd;
@@ -197,12 +211,10 @@ TEST(Locate, TheStepGainTestWeighsTheLevelsReadingAgainstNoChange) {
 // least squares (an AR whitener of its first fit's residual) operating-point steps still fire
 // in few draws and a gain change of 3.5 of its sd in most.
 TEST(Locate, TheStepGainTestKeepsItsSizeOnColouredNoise) {
-  int blocks = 0;
-  Eigen::Index warm = 0;
-  Problem pr = prepare_problem(test::null_record(73), &blocks, &warm);
-  const Eigen::VectorXd yh = model_output(pr, {}).yhat;
-  const Eigen::Index n = yh.size(), half = n / 2;
-  pr.level_step_removed_at = half;
+  StepRecord rec;
+  Problem& pr = rec.pr;
+  const Eigen::VectorXd& yh = rec.yh;
+  const Eigen::Index n = yh.size(), half = rec.half;
   const auto coloured = [&](std::uint64_t seed) {
     Eigen::VectorXd w = test::white(n, 0.3 * test::rms(yh), seed);
     for (Eigen::Index k = 1; k < n; ++k) w(k) += 0.9 * w(k - 1);

@@ -386,14 +386,9 @@ TEST(Verdict, ADriftSetAsideIsSaidAndAnAlternativeWithItIsComparedWithThePair) {
   EXPECT_EQ(set_aside_drift_pair(r), nullptr);
 }
 
-// Under the minimum gain, when the input tests failed and nothing reached it: a linear
-// effect scoring above zero whose residual is independent of the input is named (the
-// residual's tests run on the hypothesis's output: here the record itself, a residual of
-// white noise); one scoring below zero, a pair whose input-side half adds nothing to its
-// disturbance, a nonlinearity without the level's evidence (nor the linear one below it),
-// and anything when the input tests passed are not (gensim_cases_test.py: an 8 % gain on a
-// 600 s record).
-TEST(Verdict, UnderTheMinimumGainALinearEffectThatExplainsTheInputTestsIsNamed) {
+// The input tests failed on a record whose residual is white noise independent of the input
+// (2000 samples at 10 ms): the setting of the rule below the minimum gain.
+DiagnoseResult failed_input_tests_on_white_noise() {
   DiagnoseResult r;
   r.problem.dt_s = 0.01;
   r.problem.u = white(2000, 1.0, 41);
@@ -403,6 +398,18 @@ TEST(Verdict, UnderTheMinimumGainALinearEffectThatExplainsTheInputTestsIsNamed) 
   r.problem.scales.z_std = 12.0;
   r.location.input_mismatch = true;
   r.location.tests.auto_corr = Eigen::VectorXd::Zero(21);
+  return r;
+}
+
+// Under the minimum gain, when the input tests failed and nothing reached it: a linear
+// effect scoring above zero whose residual is independent of the input is named (the
+// residual's tests run on the hypothesis's output: here the record itself, a residual of
+// white noise); one scoring below zero, a pair whose input-side half adds nothing to its
+// disturbance, a nonlinearity without the level's evidence (nor the linear one below it),
+// and anything when the input tests passed are not (gensim_cases_test.py: an 8 % gain on a
+// 600 s record).
+TEST(Verdict, UnderTheMinimumGainALinearEffectThatExplainsTheInputTestsIsNamed) {
+  DiagnoseResult r = failed_input_tests_on_white_noise();
   const auto hypothesis = [&r](std::vector<AppliedEffect> effects, double score) {
     HypothesisFit h;
     h.effects = std::move(effects);
@@ -439,15 +446,7 @@ TEST(Verdict, UnderTheMinimumGainALinearEffectThatExplainsTheInputTestsIsNamed) 
 // named when it raises the validation fit at all, its parameter unpaid (gensim seed 7 g019,
 // a transducer gain 0.920 from 60 s: the fit rises 0.25 points, the score is -0.003).
 TEST(Verdict, AGainTheLevelStepFixedIsNamedWhenItRaisesTheFitAtAll) {
-  DiagnoseResult r;
-  r.problem.dt_s = 0.01;
-  r.problem.u = white(2000, 1.0, 41);
-  r.problem.y = white(2000, 10.0, 43);
-  r.problem.est_weight = Eigen::VectorXd::Ones(2000);
-  r.problem.val_weight = Eigen::VectorXd::Ones(2000);
-  r.problem.scales.z_std = 12.0;
-  r.location.input_mismatch = true;
-  r.location.tests.auto_corr = Eigen::VectorXd::Zero(21);
+  DiagnoseResult r = failed_input_tests_on_white_noise();
   HypothesisFit gain;
   gain.effects = {{Effect::kGainChange, {0.954}, Place::kInput, {}}};
   gain.validation_fit_before = 67.78;
