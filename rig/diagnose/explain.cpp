@@ -392,6 +392,13 @@ std::string explain(const DiagnoseResult& r) {
         "dynamics that changed during the record. ",
         i == 0 ? "first" : "second", half.cross_ratio, half.cross_threshold);
   }
+  if (const CouplingTest& c = r.location.coupling; r.location.coupling_counts())
+    s += fmt::format(
+        "The residual follows the model's output through a low-pass of RC {:.1f} s with the "
+        "coefficient {:.2f} +- {:.2f}, as an AC coupling of the output leaves it (-1; {:.1e} "
+        "times as likely as none). ",
+        c.rc_s, c.beta, c.sd, std::exp(c.log_likelihood_ratio));
+
   const HypothesisFit* h = r.chosen();
   if (!h) {
     s += "No effect of the library explains it: the best";

@@ -120,6 +120,17 @@ struct StepGain {
   bool decisive = false;
 };
 
+// The coupling test (locate_coupling.cpp): the residual against -LP_RC(yhat), what an
+// undeclared AC coupling of the output leaves, at the grid's RC that reads likeliest.
+struct CouplingTest {
+  bool tested = false;
+  double rc_s = 0.0;
+  double beta = 0.0, sd = 0.0;  // the residual's coefficient on LP_RC(yhat); -1: a coupling
+  // ln of how much likelier the coupling's -1 is than 0: (z^2 - z_coupled^2) / 2.
+  double log_likelihood_ratio = 0.0;
+  bool fires = false;
+};
+
 struct Location {
   FrequencyLocation freq;
   std::vector<TimeWindow> windows;  // where the residual leaves its noise bounds
@@ -134,9 +145,13 @@ struct Location {
   // every effect is tried, but none needs to be found (every model is clipped there too).
   OutputClip clip;
   StepGain step_gain;
+  CouplingTest coupling;
   bool input_mismatch = false;  // frequency, cross-correlation, amplitude or step-gain test failed
   bool behind_drift = false;    // ... only once the drift was taken out of the residual
   bool disturbance = false;
+  // The coupling test fired with no drift beside it: a drift makes the same slow swings, and
+  // beside one the test is confounded (the input tests behind the drift decide then).
+  bool coupling_counts() const { return coupling.fires && !dist.drift; }
   // Whether effects are searched for: a failed test, a disturbance or a clipped output.
   bool worth_searching() const { return input_mismatch || disturbance || clip.side != 0; }
 };
@@ -183,6 +198,9 @@ Eigen::Index residual_test_lags(const Problem& pr, const Location& loc);
 // The step-gain test at Problem::level_step_removed_at (untested without one).
 StepGain locate_step_gain(const Problem& pr, const Eigen::VectorXd& residual,
                           const Eigen::VectorXd& yhat, double level_ratio);
+
+CouplingTest locate_coupling(const Problem& pr, const Eigen::VectorXd& residual,
+                             const Eigen::VectorXd& yhat);
 
 // Welch segment length for a record of n samples: a power of two, about n / 8, in [64, 4096].
 Eigen::Index welch_segment(Eigen::Index n);

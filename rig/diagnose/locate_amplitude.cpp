@@ -240,17 +240,10 @@ StepGain locate_step_gain(const Problem& pr, const Eigen::VectorXd& r_all,
   x.col(1).tail(m - k) = yh.tail(m - k);
   // Generalised least squares: the residual's colour (a drift, the grid's wander) is taken
   // out by an AR whitener fitted to the first fit's residual, then the fit is repeated.
-  const Eigen::VectorXd a =
-      ar_whitener(r - x * least_squares(x, r).beta, thresholds::kStepGainWhitenOrder);
-  Eigen::MatrixXd xw(m - (a.size() - 1), 2);
-  for (int j = 0; j < 2; ++j) xw.col(j) = whiten(x.col(j), a);
-  const Eigen::VectorXd rw = whiten(r, a);
-  const Ls fit = least_squares(xw, rw);
-  const Eigen::VectorXd ew = rw - xw * fit.beta;
-  const double n_eff = static_cast<double>(rw.size()) /
-                       bartlett_factor(ew, whiten(yh, a), std::min<Eigen::Index>(200, m / 4));
-  const double var =
-      fit.rss / std::max(1.0, n_eff - 2) * (fit.inv(0, 0) + fit.inv(1, 1) - 2.0 * fit.inv(0, 1));
+  const GlsFit gls =
+      gls_fit(x, r, yh, thresholds::kWhitenOrder, std::min<Eigen::Index>(200, m / 4));
+  const Ls& fit = gls.fit;
+  const double var = gls.s2 * (fit.inv(0, 0) + fit.inv(1, 1) - 2.0 * fit.inv(0, 1));
   s.tested = true;
   s.level_ratio = level_ratio;
   s.change = fit.beta(1) - fit.beta(0);

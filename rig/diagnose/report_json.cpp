@@ -62,6 +62,16 @@ json level_shift_json(const DiagnoseResult& r) {
   return j;
 }
 
+// The coupling test (locate.hpp CouplingTest); null when the record is too short for it.
+json coupling_json(const CouplingTest& c) {
+  if (!c.tested) return nullptr;
+  return {{"rc_s", c.rc_s},
+          {"coefficient", c.beta},
+          {"coefficient_sd", c.sd},
+          {"log_likelihood_ratio", c.log_likelihood_ratio},
+          {"fires", c.fires}};
+}
+
 // The recorded bus frequency and what became of it (bus_frequency.hpp); null without one.
 json bus_frequency_json(const DiagnoseResult& r) {
   if (!r.bus_frequency) return nullptr;
@@ -110,6 +120,7 @@ json location_json(const DiagnoseResult& r) {
           {"timing_nuisance_s", r.timing_nuisance_s},
           {"time_windows", windows},
           {"level_shift", level_shift_json(r)},
+          {"coupling", coupling_json(loc.coupling)},
           {"amplitude_dependent", loc.amp.fails()},
           {"amplitude",
            {{"by_level", levels},

@@ -3,6 +3,9 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
+#include <complex>
+#include <unsupported/Eigen/FFT>
+#include <vector>
 
 #include "rig/diagnose/blocks.hpp"
 #include "rig/diagnose/locate.hpp"
@@ -24,12 +27,41 @@ double quantile(std::vector<double> v, double q) {
   return v[k];
 }
 
+namespace {
+
+// Above this many lags the autocorrelations are taken by FFT (the coupling test's, over three
+// of its time constants); below it directly, as the tests at the excitation's scale always were.
+constexpr Eigen::Index kDirectLagsMax = 256;
+
+// x's circular autocorrelation over a zero-padded length (no wrap for lags below n), lags
+// 0..lags.
+Eigen::VectorXd autocorrelation_fft(const Eigen::VectorXd& x, Eigen::Index lags) {
+  std::size_t len = 1;
+  while (len < static_cast<std::size_t>(x.size() + lags)) len *= 2;
+  std::vector<double> padded(len, 0.0);
+  std::copy(x.data(), x.data() + x.size(), padded.begin());
+  Eigen::FFT<double> fft;
+  std::vector<std::complex<double>> spectrum;
+  fft.fwd(spectrum, padded);
+  for (auto& v : spectrum) v = std::norm(v);
+  std::vector<double> back;
+  fft.inv(back, spectrum);
+  return Eigen::Map<const Eigen::VectorXd>(back.data(), lags + 1);
+}
+
+}  // namespace
+
 double bartlett_factor(const Eigen::VectorXd& a, const Eigen::VectorXd& b, Eigen::Index lags) {
   const Eigen::Index n = a.size();
   const double aa = a.squaredNorm(), bb = b.squaredNorm();
   if (aa <= 0.0 || bb <= 0.0) return 1.0;
   double c = 1.0;
-  for (Eigen::Index k = 1; k <= std::min(lags, n - 1); ++k) {
+  if (lags = std::min(lags, n - 1); lags > kDirectLagsMax) {
+    const Eigen::VectorXd ra = autocorrelation_fft(a, lags), rb = autocorrelation_fft(b, lags);
+    for (Eigen::Index k = 1; k <= lags; ++k) c += 2.0 * (ra(k) / aa) * (rb(k) / bb);
+    return std::max(c, 1.0);
+  }
+  for (Eigen::Index k = 1; k <= lags; ++k) {
     const double ra = a.head(n - k).dot(a.tail(n - k)) / aa;
     const double rb = b.head(n - k).dot(b.tail(n - k)) / bb;
     c += 2.0 * ra * rb;
@@ -65,6 +97,21 @@ Eigen::VectorXd whiten(const Eigen::VectorXd& x, const Eigen::VectorXd& a) {
   Eigen::VectorXd w = Eigen::VectorXd::Zero(n - p);
   for (Eigen::Index j = 0; j <= p; ++j) w += a(j) * x.segment(p - j, n - p);
   return w;
+}
+
+GlsFit gls_fit(const Eigen::MatrixXd& x, const Eigen::VectorXd& r, const Eigen::VectorXd& reference,
+               int order, Eigen::Index lags) {
+  const Eigen::VectorXd a = ar_whitener(r - x * least_squares(x, r).beta, order);
+  const Eigen::Index p = x.cols();
+  Eigen::MatrixXd xw(r.size() - (a.size() - 1), p);
+  for (Eigen::Index j = 0; j < p; ++j) xw.col(j) = whiten(x.col(j), a);
+  const Eigen::VectorXd rw = whiten(r, a);
+  GlsFit out{least_squares(xw, rw)};
+  const Eigen::VectorXd ew = rw - xw * out.fit.beta;
+  const double n_eff =
+      static_cast<double>(rw.size()) / bartlett_factor(ew, whiten(reference, a), lags);
+  out.s2 = out.fit.rss / std::max(1.0, n_eff - static_cast<double>(p));
+  return out;
 }
 
 Eigen::VectorXd detrend(const Problem& pr, const Eigen::VectorXd& x) {

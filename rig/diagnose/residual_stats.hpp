@@ -33,6 +33,19 @@ Eigen::VectorXd ar_whitener(const Eigen::VectorXd& e, int order);
 // x filtered by A(q), its first p samples dropped (they have no full history).
 Eigen::VectorXd whiten(const Eigen::VectorXd& x, const Eigen::VectorXd& a);
 
+// Generalised least squares r = X beta: the first fit's residual gives an AR whitener of the
+// given order (its colour: a drift, the grid's wander, a transducer's lag), r and X are
+// whitened and fitted again. s2 is the whitened residual's variance per effective sample
+// (the Bartlett factor over `lags` against `reference` whitened alike: about 1 once the
+// colour is out, unless the regressor is slower than the whitener reaches), so s2 * fit.inv
+// is beta's covariance.
+struct GlsFit {
+  Ls fit;
+  double s2 = 0.0;
+};
+GlsFit gls_fit(const Eigen::MatrixXd& x, const Eigen::VectorXd& r, const Eigen::VectorXd& reference,
+               int order, Eigen::Index lags);
+
 // Slow content (below the drift test's time scale) removed: a drift must not project onto
 // regressors that carry a mean, such as G(u 1{u >= 0}).
 Eigen::VectorXd detrend(const Problem& pr, const Eigen::VectorXd& x);

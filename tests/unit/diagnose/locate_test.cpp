@@ -5,6 +5,8 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <numbers>
+#include <random>
 #include <vector>
 
 #include "concealed.hpp"
@@ -237,6 +239,59 @@ TEST(Locate, TheStepGainTestKeepsItsSizeOnColouredNoise) {
   EXPECT_GE(fired(3.5, 3.5), kDraws * 70 / 100);
   EXPECT_LE(fired(0.0, 2.15), 12);
   EXPECT_LE(fired(0.0, 3.5), 12);
+}
+
+// The coupling test (locate_coupling.cpp, thresholds.hpp kCouplingLikelihoodRatio) on 60
+// seeded draws each, beside coloured noise (white through a one-pole low-pass at 0.9 per
+// sample): a slow wander three times a coupling's residual (three swings of 40-100 s, random
+// phases: a drift) fires in none, and the residual an AC coupling of RC 8 s leaves
+// (-LP_RC(yhat)) in most, its RC read within a factor 2.
+TEST(Locate, TheCouplingTestTellsACouplingFromAWander) {
+  StepRecord rec;
+  const Problem& pr = rec.pr;
+  const Eigen::VectorXd& yh = rec.yh;
+  const Eigen::Index n = yh.size();
+  const Eigen::VectorXd dev = yh.array() - yh.mean();
+  Eigen::VectorXd coupled(n);  // -LP_RC(yhat): what the coupling takes out of the output
+  const double rc_s = 8.0, a = pr.dt_s / (rc_s + pr.dt_s);
+  double state = 0.0;
+  for (Eigen::Index k = 0; k < n; ++k) coupled(k) = -(state += a * (dev(k) - state));
+  const double size = test::rms(coupled);
+  // White noise at twice the coupling's rms, coloured to about 4.6 times it; the wander at
+  // three times it.
+  constexpr double kNoiseOfCoupling = 2.0, kWanderOfCoupling = 3.0;
+  const auto coloured = [&](std::uint64_t seed) {
+    Eigen::VectorXd w = test::white(n, kNoiseOfCoupling * size, seed);
+    for (Eigen::Index k = 1; k < n; ++k) w(k) += 0.9 * w(k - 1);
+    return w;
+  };
+  const auto wander = [&](std::uint64_t seed) {
+    std::mt19937_64 rng(seed);
+    std::uniform_real_distribution<double> phase(0.0, 2.0 * std::numbers::pi), period(40.0, 100.0);
+    Eigen::VectorXd w = Eigen::VectorXd::Zero(n);
+    for (int i = 0; i < 3; ++i) {
+      const double p = period(rng), f = phase(rng);
+      for (Eigen::Index k = 0; k < n; ++k)
+        w(k) += std::sin(2.0 * std::numbers::pi * static_cast<double>(k) * pr.dt_s / p + f);
+    }
+    return Eigen::VectorXd(w * (kWanderOfCoupling * size / test::rms(w)));
+  };
+  constexpr int kDraws = 60;
+  int wander_fired = 0, coupling_fired = 0, rc_read = 0;
+  for (int i = 0; i < kDraws; ++i) {
+    const auto seed = 3000 + static_cast<std::uint64_t>(i);
+    wander_fired += locate_coupling(pr, coloured(seed) + wander(seed), yh).fires ? 1 : 0;
+    const CouplingTest c = locate_coupling(pr, coloured(seed) + coupled, yh);
+    coupling_fired += c.fires ? 1 : 0;
+    rc_read += c.fires && std::abs(std::log(c.rc_s / rc_s)) <= std::log(2.0) ? 1 : 0;
+  }
+  std::printf(
+      "coupling test: a wander fired in %d of %d draws, a coupling of RC %.0f s in %d "
+      "(RC within a factor 2 in %d); coupling rms %.4g, yhat rms %.4g\n",
+      wander_fired, kDraws, rc_s, coupling_fired, rc_read, size, test::rms(yh));
+  EXPECT_EQ(wander_fired, 0);
+  EXPECT_GE(coupling_fired, kDraws * 90 / 100);
+  EXPECT_GE(rc_read, kDraws * 90 / 100);
 }
 
 // The value of y below which a fraction q of its samples lie.
