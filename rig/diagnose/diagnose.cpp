@@ -40,6 +40,10 @@ ModelOutput locate_baseline(Problem& pr, DiagnoseResult& r) {
   r.fit_before_pct = weighted_fit_pct(pr.y, base.yhat, used);
   r.validation_fit_before_pct = weighted_fit_pct(pr.y, base.yhat, pr.val_weight);
   r.location = locate(pr, base.yhat);
+  // The coupling test on the baseline alone (the other locations seed fits; it costs a
+  // generalised least-squares fit per RC of its grid).
+  r.location.coupling = locate_coupling(pr, pr.y - base.yhat, base.yhat);
+  if (r.location.coupling_counts()) r.location.input_mismatch = true;
   if (step) {
     // The level before the step (y_level is the recorded mean over the whole record).
     const double after = 1.0 - *r.level_shift_time_s / pr.scales.duration_s;

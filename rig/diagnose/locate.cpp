@@ -153,8 +153,7 @@ Location locate(const Problem& pr, const Eigen::VectorXd& yhat) {
   test_halves(pr, r, from, lags, loc);
   loc.dist = locate_disturbances(pr, r, loc.freq);
   loc.clip = pr.output_clip;
-  loc.coupling = locate_coupling(pr, r, yhat);
-  loc.input_mismatch = input_tests_fail(loc) || loc.coupling_counts();
+  loc.input_mismatch = input_tests_fail(loc);
   loc.disturbance = loc.dist.periodic || loc.dist.drift;
   if (loc.dist.drift && !loc.input_mismatch) look_behind_drift(pr, r, yhat, lags, loc);
   return loc;

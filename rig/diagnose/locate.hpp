@@ -145,10 +145,11 @@ struct Location {
   // every effect is tried, but none needs to be found (every model is clipped there too).
   OutputClip clip;
   StepGain step_gain;
-  CouplingTest coupling;
   bool input_mismatch = false;  // frequency, cross-correlation, amplitude or step-gain test failed
   bool behind_drift = false;    // ... only once the drift was taken out of the residual
   bool disturbance = false;
+  // The baseline's only (diagnose.cpp locate_baseline).
+  CouplingTest coupling;
   // The coupling test fired with no drift beside it: a drift makes the same slow swings, and
   // beside one the test is confounded (the input tests behind the drift decide then).
   bool coupling_counts() const { return coupling.fires && !dist.drift; }
