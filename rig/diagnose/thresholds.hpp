@@ -358,7 +358,7 @@ inline constexpr double kCouplingRcsPerRecord = 6.0;
 // reading is this many times as likely as none. Over the 684 records of droopsim seeds 1, 9,
 // 10, 13 and 14 and gensim seeds 5-7, no null and no linear effect but a coupling reaches
 // e^6.0 (about 400; a drift, a lag behind a drift); the weakest coupling found by no other
-// test, gensim seed 6 g069 (RC 15 s), reads e^17.6.
+// test, gensim seed 6 g069 (RC 15 s), reads e^18.0.
 inline constexpr double kCouplingLikelihoodRatio = 1e4;
 
 // --- Where an input-side nonlinearity sits (placement.cpp) ---
