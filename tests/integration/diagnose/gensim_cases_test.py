@@ -17,6 +17,9 @@ these are the cases that pin a fixed behaviour:
   * a rack stop behind the grid's wander (benchmark seed 1, g074), which the input tests
     miss behind it: found by pairing the input-side effects with the dominant drift, after
     the governor's PI with its integrator held at the stop;
+  * a rack stop behind a 20 kW drift (seed 5, g027) whose input tests failed while the
+    drift alone scores most: paired with the drift (a drift does not explain a failed input
+    test), `saturation`;
   * a shaft mode that moved half-way (seed 4, g054), which no input test sees: found by the
     blind search of every input-side effect, named by what it adds;
   * an undeclared AC coupling of the transducer behind a drift (benchmark seed 4, g070) and
@@ -110,6 +113,20 @@ class GensimCases(unittest.TestCase):
         h = rep["hypotheses"][rep["chosen"]]
         self.assertEqual([e["effect"] for e in h["effects"]], ["saturation", "drift"])
         self.assertIn("found no mismatch beside the disturbance", rep["explanation"])
+        self.assertGreater(h["validation_fit_after"], h["validation_fit_before"])
+
+    def test_a_rack_stop_behind_a_drift_the_input_tests_saw_is_paired_with_it(self):
+        # Seed 5 g027: the input tests fail, the drift alone scores most and its residual
+        # passes the cross-correlation test; a drift does not explain a failed input test,
+        # so the input-side effects are paired with it (the map at the output alone was
+        # named before, no pair having been fitted).
+        _, rep, seed = self.run_case("saturation", "large", "drift", 974186)
+        self.assertTrue(rep["location"]["input_mismatch"], rep["explanation"])
+        best = next(h for h in rep["hypotheses"] if len(h["effects"]) == 1)
+        self.assertEqual([e["effect"] for e in best["effects"]], ["drift"], best)
+        self.assertEqual(rep["verdict"], "saturation", f"seed {seed}: {rep['explanation']}")
+        h = rep["hypotheses"][rep["chosen"]]
+        self.assertIn("drift", [e["effect"] for e in h["effects"]], rep["explanation"])
         self.assertGreater(h["validation_fit_after"], h["validation_fit_before"])
 
     def test_a_moved_mode_no_input_test_sees_is_found_by_the_blind_search(self):
