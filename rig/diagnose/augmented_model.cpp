@@ -246,11 +246,18 @@ std::function<double(std::span<const double>)> error_effect(const Problem& pr,
 }
 
 // A governor loop closed with a fitted feedback that makes it unstable (the recording's
-// plant is not: the point is outside the hypothesis).
+// plant is not: the point is outside the hypothesis), or that could not be closed: an effect
+// before it left the model no static gain (an AC coupling: G0 = 0, so G / G0 is no loop's
+// and the closed loop's numerator vanishes, its denominator too when the loop is unchanged).
 bool unstable_loop(std::span<const AppliedEffect> effects, const model::TransferFunction& tf) {
-  return std::any_of(effects.begin(), effects.end(),
-                     [](const AppliedEffect& e) { return e.place == Place::kGovernorLoop; }) &&
-         !tf.is_stable();
+  if (std::none_of(effects.begin(), effects.end(),
+                   [](const AppliedEffect& e) { return e.place == Place::kGovernorLoop; }))
+    return false;
+  const auto vanishes = [](const Eigen::VectorXd& p) {
+    return p.size() == 0 || !p.allFinite() || p.cwiseAbs().maxCoeff() == 0.0;
+  };
+  const bool degenerate = vanishes(tf.num) || vanishes(tf.den);
+  return degenerate || !tf.is_stable();
 }
 
 }  // namespace

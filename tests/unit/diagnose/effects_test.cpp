@@ -269,6 +269,32 @@ TEST(Effects, ARunawayResidualLeavesTheFitWithAFiniteResult) {
   EXPECT_GT(h.effects[0].params[0], 0.0);
 }
 
+// An AC coupling leaves the model no static gain, so a governor loop closed after it has no
+// G / G0: the pair explains nothing (NaN, which the fit rejects) instead of stopping the
+// diagnosis (a PRBS record of gensim seed 1, g057, failed with exit 2 on it).
+TEST(Effects, AGovernorLoopAfterAnAcCouplingExplainsNothingAndDoesNotThrow) {
+  Problem pr;
+  pr.tf = nominal_genset_model();
+  pr.dt_s = 0.01;
+  const Eigen::Index n = 2000;
+  const Eigen::ArrayXd t = Eigen::ArrayXd::LinSpaced(n, 0.0, static_cast<double>(n - 1)) * 0.01;
+  pr.u = (2 * std::numbers::pi * 0.7 * t).sin().matrix();
+  pr.est_weight = pr.val_weight = Eigen::ArrayXd::Ones(n);
+  finish_problem(pr);
+  pr.y = pr.baseline_z;
+  for (const double delay_s : {-0.0016, 0.0, 0.002}) {  // none (the failing case), and one
+    const std::vector<AppliedEffect> pair{
+        {Effect::kAcCoupling, {8.3}},
+        {Effect::kDeadTime, {delay_s}, Place::kGovernorLoop, {1.0, 0.0005, 0.1}}};
+    ModelOutput out;
+    ASSERT_NO_THROW(out = model_output(pr, pair)) << delay_s;
+    EXPECT_FALSE(out.yhat.allFinite()) << delay_s;
+    // The same delay in the loop without the coupling is a model.
+    ASSERT_NO_THROW(out = model_output(pr, std::span<const AppliedEffect>(&pair[1], 1)));
+    EXPECT_TRUE(out.yhat.allFinite()) << delay_s;
+  }
+}
+
 }  // namespace
 }  // namespace rig::diagnose
 
