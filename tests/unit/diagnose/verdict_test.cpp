@@ -444,7 +444,8 @@ TEST(Verdict, UnderTheMinimumGainALinearEffectThatExplainsTheInputTestsIsNamed) 
 
 // A gain change the step-gain test fired on has its value fixed by the level's step: it is
 // named when it raises the validation fit at all, its parameter unpaid (gensim seed 7 g019,
-// a transducer gain 0.920 from 60 s: the fit rises 0.25 points, the score is -0.003).
+// a transducer gain 0.920 from 60 s: the fit rises 0.25 points, the score is -0.003), also
+// below a nonlinearity that nothing but its fit shows.
 TEST(Verdict, AGainTheLevelStepFixedIsNamedWhenItRaisesTheFitAtAll) {
   DiagnoseResult r = failed_input_tests_on_white_noise();
   HypothesisFit gain;
@@ -464,6 +465,22 @@ TEST(Verdict, AGainTheLevelStepFixedIsNamedWhenItRaisesTheFitAtAll) {
   // Nor is any other effect freed of its parameters' cost.
   r.hypotheses[0] = gain;
   r.hypotheses[0].effects = {{Effect::kExtraLag, {0.05}, Place::kInput, {}}};
+  EXPECT_EQ(explains_below_min_gain(r), -1);
+  // Ranked below a nonlinearity the level and the direction do not show, the fixed gain is
+  // still named: the step-gain test is its evidence (a PRBS record of gensim seed 1, g019).
+  HypothesisFit band = gain;
+  band.effects = {{Effect::kDeadband, {0.013}, Place::kError, {}}};
+  band.score = 0.03;
+  band.validation_fit_after = band.validation_fit_before + 0.28;
+  r.hypotheses = {band, gain};
+  EXPECT_EQ(explains_below_min_gain(r), 1);
+  // But not a linear effect below it, nor the gain when the test did not fire.
+  r.hypotheses = {band, r.hypotheses[1]};
+  r.hypotheses[1].effects = {{Effect::kExtraLag, {0.05}, Place::kInput, {}}};
+  r.hypotheses[1].score = 0.02;
+  EXPECT_EQ(explains_below_min_gain(r), -1);
+  r.hypotheses = {band, gain};
+  r.location.step_gain.fires = false;
   EXPECT_EQ(explains_below_min_gain(r), -1);
 }
 
