@@ -107,6 +107,7 @@ DiagnoseResult diagnose(const DiagnoseInput& in, const DiagnoseOptions& o) {
   r.hypotheses = r.location.worth_searching() ? search_hypotheses(pr, r.location, base.yhat, o)
                                               : blind_search(pr, r.location, base.yhat, o);
   test_direction_on_spans(r);
+  weigh_plays_on_two_level_input(r);
   r.chosen_index = choose(r, o.min_gain_pct, &r.drift_set_aside_index);
   if (map_of_the_move(r))
     r.chosen_index = r.drift_set_aside_index = -1;

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <iterator>
+#include <limits>
 #include <utility>
 #include <vector>
 
@@ -58,9 +59,10 @@ bool direction_evidenced(const HypothesisFit& h, const Location& loc) {
   return std::none_of(h.effects.begin(), h.effects.end(), [&](const AppliedEffect& e) {
     // On a two-level input the input's direction is linear in du/dt: no evidence. On the
     // record, or on the hypothesis's own span.
-    const double input_z = loc.amp.two_level_input ? 0.0
-                                                   : std::max(std::abs(loc.amp.direction_z),
-                                                              std::abs(h.span_direction_z));
+    const double input_z =
+        loc.amp.two_level_input
+            ? (h.fit_shows_direction ? kDirectionEvidenceZ : 0.0)
+            : std::max(std::abs(loc.amp.direction_z), std::abs(h.span_direction_z));
     const double z = e.place == Place::kFeedback ? loc.amp.output_direction_z : input_z;
     return effect_model(e.effect).needs_direction_evidence && std::abs(z) < kDirectionEvidenceZ;
   });
@@ -124,6 +126,28 @@ void test_direction_on_spans(DiagnoseResult& r) {
       hit = std::prev(done.end());
     }
     h.span_direction_z = hit->second;
+  }
+}
+
+namespace {
+bool has_play(const HypothesisFit& h) {
+  return std::any_of(h.effects.begin(), h.effects.end(), [](const AppliedEffect& e) {
+    return effect_model(e.effect).needs_direction_evidence;
+  });
+}
+}  // namespace
+
+void weigh_plays_on_two_level_input(DiagnoseResult& r) {
+  if (!r.location.amp.two_level_input) return;
+  double best_other = -std::numeric_limits<double>::infinity();
+  for (const auto& h : r.hypotheses)
+    if (!has_play(h) && std::isfinite(h.score)) best_other = std::max(best_other, h.score);
+  for (auto& h : r.hypotheses) {
+    const bool inside = std::none_of(h.effects.begin(), h.effects.end(), [](const auto& e) {
+      return effect_model(e.effect).needs_direction_evidence && e.place == Place::kInput;
+    });
+    h.fit_shows_direction = has_play(h) && inside && std::isfinite(h.score) &&
+                            h.score >= best_other + thresholds::kTwoLevelPlayMarginPct;
   }
 }
 

@@ -40,4 +40,10 @@ bool level_evidenced(const DiagnoseResult& r, const HypothesisFit& h);
 // from 60 s: |z| 2.7 on the record, under the evidence bound).
 void test_direction_on_spans(DiagnoseResult& r);
 
+// On a two-level input (a PRBS) the input's direction is no evidence, but the signals inside
+// the loop and the output still move continuously: a play or hysteresis loop placed there
+// that outscores every hypothesis without a direction effect by kTwoLevelPlayMarginPct is
+// shown by its fit (fit_shows_direction).
+void weigh_plays_on_two_level_input(DiagnoseResult& r);
+
 }  // namespace rig::diagnose

@@ -51,7 +51,13 @@ std::string where_in_time_and_level(const DiagnoseResult& r) {
     s += "The input takes two levels (a PRBS): on it any static map of the bias is a gain and "
          "an offset, and a play or a slew limit acts alike on every step, so nonlinearities "
          "are looked for only inside the loop and at the output, and the input's direction is "
-         "no evidence of a play. ";
+         "no evidence of a play";
+    s += h && h->fit_shows_direction
+             ? fmt::format(
+                   "; a play or hysteresis loop there is shown by its fit alone, "
+                   "{:.1f} points or more over every explanation without one. ",
+                   thresholds::kTwoLevelPlayMarginPct)
+             : ". ";
     return s;
   }
   if (a.amplitude_dependent && a.by_level.size() >= 2)

@@ -34,6 +34,9 @@ struct HypothesisFit {
   // The direction test's z on that span, for a play or hysteresis loop with a span of its
   // own (evidence.hpp test_direction_on_spans; 0 otherwise).
   double span_direction_z = 0.0;
+  // On a two-level input, a play or hysteresis loop inside the loop that outscores every
+  // hypothesis without one by the margin (evidence.hpp weigh_plays_on_two_level_input).
+  bool fit_shows_direction = false;
 
   std::string name() const;  // "dead_time" or "dead_time+drift"
   int parameter_count() const;

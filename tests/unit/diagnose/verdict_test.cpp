@@ -16,6 +16,7 @@
 #include "rig/diagnose/diagnose.hpp"
 #include "rig/diagnose/drift_materiality.hpp"
 #include "rig/diagnose/effect_registry.hpp"
+#include "rig/diagnose/evidence.hpp"
 #include "rig/diagnose/placement.hpp"
 #include "rig/diagnose/search.hpp"
 #include "rig/diagnose/split.hpp"
@@ -680,6 +681,30 @@ TEST(Verdict, APlayShownBeyondALagIsNamedOverTheLag) {
   EXPECT_EQ(choice(-4.0, 10.0, 10.3), "backlash");   // the margin waived
   EXPECT_EQ(choice(-1.0, 10.0, 10.3), "extra_lag");  // the margin holds
   EXPECT_EQ(choice(+4.0, 10.0, 9.5), "extra_lag");   // not a play's sign
+}
+
+// On a two-level input the input's direction is no evidence (evidence.hpp
+// weigh_plays_on_two_level_input): a play at the output (where the signal moves
+// continuously) is named only when its fit beats every hypothesis without a play by
+// kTwoLevelPlayMarginPct; a play on the bias never is (gensim seed 1 with a PRBS bias: the
+// actuator's Bouc-Wen hysteresis 1.4-3.3 points over the rest, read as a gain or a limit).
+TEST(Verdict, OnATwoLevelInputAPlayIsShownByItsFitAloneByTheMargin) {
+  const auto choice = [](double play, Place place) {
+    const AppliedEffect lag{Effect::kExtraLag, {0.05}};
+    std::vector<std::pair<std::vector<AppliedEffect>, double>> hs{
+        {{{Effect::kBacklash, {0.1}, place, {}}}, play}, {{lag}, 10.0}};
+    std::sort(hs.begin(), hs.end(),
+              [](const auto& a, const auto& b) { return a.second > b.second; });
+    DiagnoseResult r = ranked(hs);
+    r.location.amp.two_level_input = true;
+    r.location.amp.direction_z = -10.0;  // on a two-level input: no evidence
+    weigh_plays_on_two_level_input(r);
+    return verdict_of(r.hypotheses[static_cast<std::size_t>(choose(r, 0.2))]);
+  };
+  const double margin = thresholds::kTwoLevelPlayMarginPct;
+  EXPECT_EQ(choice(10.0 + margin + 0.05, Place::kOutput), "backlash");
+  EXPECT_EQ(choice(10.0 + margin - 0.05, Place::kOutput), "extra_lag");
+  EXPECT_EQ(choice(10.0 + margin + 0.05, Place::kInput), "extra_lag");
 }
 
 // A disturbance alone does not explain a residual whose amplitude tests fired: the pairs with
