@@ -6,6 +6,7 @@
 
 #include "rig/diagnose/bus_frequency.hpp"
 #include "rig/diagnose/evidence.hpp"
+#include "rig/diagnose/screen.hpp"
 #include "rig/diagnose/search.hpp"
 #include "rig/diagnose/split.hpp"
 #include "rig/diagnose/timing.hpp"
@@ -106,6 +107,7 @@ DiagnoseResult diagnose(const DiagnoseInput& in, const DiagnoseOptions& o) {
   gate_to_windows(pr, r.location);
   r.hypotheses = r.location.worth_searching() ? search_hypotheses(pr, r.location, base.yhat, o)
                                               : blind_search(pr, r.location, base.yhat, o);
+  drop_repeats(r.hypotheses);
   test_direction_on_spans(r);
   weigh_plays_on_two_level_input(r);
   r.chosen_index = choose(r, o.min_gain_pct, &r.drift_set_aside_index);

@@ -70,6 +70,27 @@ void rank(std::vector<HypothesisFit>& hs) {
   });
 }
 
+void drop_repeats(std::vector<HypothesisFit>& hs) {
+  const auto same = [](const HypothesisFit& a, const HypothesisFit& b) {
+    if (a.effects.size() != b.effects.size() || a.active_from != b.active_from ||
+        a.active_to != b.active_to)
+      return false;
+    for (std::size_t i = 0; i < a.effects.size(); ++i) {
+      const AppliedEffect &x = a.effects[i], &y = b.effects[i];
+      if (x.effect != y.effect || x.place != y.place || x.params != y.params ||
+          x.place_params != y.place_params)
+        return false;
+    }
+    return true;
+  };
+  std::vector<HypothesisFit> kept;
+  kept.reserve(hs.size());
+  for (auto& h : hs)
+    if (std::none_of(kept.begin(), kept.end(), [&](const HypothesisFit& k) { return same(k, h); }))
+      kept.push_back(std::move(h));
+  hs = std::move(kept);
+}
+
 namespace {
 
 // Every candidate fitted on the problem as it is, on the worker threads. A fit that throws

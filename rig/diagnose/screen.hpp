@@ -16,6 +16,11 @@ using Candidate = std::vector<std::vector<AppliedEffect>>;  // starting points o
 // Best score first (stable).
 void rank(std::vector<HypothesisFit>& hypotheses);
 
+// A ranked list without the repeats: a hypothesis whose effects, places, parameters and span
+// equal one ranked above it (the same pair reached by two of the search's routes) is
+// dropped, so that the report lists each once.
+void drop_repeats(std::vector<HypothesisFit>& hypotheses);
+
 // Every candidate fitted in full, on options.threads threads.
 std::vector<HypothesisFit> fit_all(const Problem& problem, const std::vector<Candidate>& candidates,
                                    const Eigen::VectorXd& baseline_yhat,

@@ -90,6 +90,28 @@ TEST(Screen, AFitThatThrowsOnAWorkerIsRethrownNotFatal) {
                std::invalid_argument);
 }
 
+// The same pair reached by two of the search's routes is listed once (the report listed a
+// damping change with a drift twice on a PRBS record of gensim seed 1, g057); a pair that
+// differs in a parameter, a place or its span is kept.
+TEST(Screen, ARepeatedHypothesisIsListedOnce) {
+  const auto fit = [](double zeta, Place place, double score) {
+    HypothesisFit h;
+    h.effects = {{Effect::kLoadDamping, {zeta}, place, {}}, {Effect::kDrift, {5.0}}};
+    h.score = score;
+    return h;
+  };
+  std::vector<HypothesisFit> hs{fit(0.32, Place::kInput, 42.4), fit(0.32, Place::kInput, 42.4),
+                                fit(0.30, Place::kInput, 41.0), fit(0.32, Place::kOutput, 40.0),
+                                fit(0.32, Place::kInput, 39.0)};
+  hs.back().active_from = 100;
+  drop_repeats(hs);
+  ASSERT_EQ(hs.size(), 4u);
+  EXPECT_DOUBLE_EQ(hs[0].score, 42.4);
+  EXPECT_DOUBLE_EQ(hs[1].score, 41.0);
+  EXPECT_EQ(hs[2].effects[0].place, Place::kOutput);
+  EXPECT_EQ(hs[3].active_from, 100);
+}
+
 // One governor, one feedback (governor_loop.hpp shared_feedback): a lag inside the governor's
 // loop pairs with an effect on its error only at a place that fits the loop's feedback, and
 // the two then close the loop with that feedback: the lag's own is neither used nor counted.
