@@ -247,9 +247,9 @@ TEST(Effects, ModelOutputFitsOffsetAndPeriodicDisturbance) {
   EXPECT_NEAR(out.derived.front().second, 0.7, 1e-6);
 }
 
-// A model that runs away (finite outputs whose squares overflow: F-16's odd-multisine
-// record met one inside a loop) is searched back from, never left without a result.
-TEST(Effects, ARunawayResidualLeavesTheFitWithAFiniteResult) {
+// The nominal genset model driven by a 0.7 Hz sine for 20 s at 100 Hz, the output its own
+// response.
+Problem sine_through_the_model() {
   Problem pr;
   pr.tf = nominal_genset_model();
   pr.dt_s = 0.01;
@@ -259,6 +259,13 @@ TEST(Effects, ARunawayResidualLeavesTheFitWithAFiniteResult) {
   pr.est_weight = pr.val_weight = Eigen::ArrayXd::Ones(n);
   finish_problem(pr);
   pr.y = pr.baseline_z;
+  return pr;
+}
+
+// A model that runs away (finite outputs whose squares overflow: F-16's odd-multisine
+// record met one inside a loop) is searched back from, never left without a result.
+TEST(Effects, ARunawayResidualLeavesTheFitWithAFiniteResult) {
+  Problem pr = sine_through_the_model();
   pr.y(100) = 1e200;  // finite, but its square is not
   const std::vector<std::vector<AppliedEffect>> starts{{{Effect::kExtraLag, {0.05}}},
                                                        {{Effect::kExtraLag, {0.2}}}};
@@ -273,15 +280,7 @@ TEST(Effects, ARunawayResidualLeavesTheFitWithAFiniteResult) {
 // G / G0: the pair explains nothing (NaN, which the fit rejects) instead of stopping the
 // diagnosis (a PRBS record of gensim seed 1, g057, failed with exit 2 on it).
 TEST(Effects, AGovernorLoopAfterAnAcCouplingExplainsNothingAndDoesNotThrow) {
-  Problem pr;
-  pr.tf = nominal_genset_model();
-  pr.dt_s = 0.01;
-  const Eigen::Index n = 2000;
-  const Eigen::ArrayXd t = Eigen::ArrayXd::LinSpaced(n, 0.0, static_cast<double>(n - 1)) * 0.01;
-  pr.u = (2 * std::numbers::pi * 0.7 * t).sin().matrix();
-  pr.est_weight = pr.val_weight = Eigen::ArrayXd::Ones(n);
-  finish_problem(pr);
-  pr.y = pr.baseline_z;
+  Problem pr = sine_through_the_model();
   for (const double delay_s : {-0.0016, 0.0, 0.002}) {  // none (the failing case), and one
     const std::vector<AppliedEffect> pair{
         {Effect::kAcCoupling, {8.3}},
